@@ -1,0 +1,328 @@
+//! A deformable body: a lattice with current positions, pins, materials and broken links.
+
+use super::error::ChainMailError;
+use super::ids::{ElementId, LinkId, MaterialId};
+use super::lattice::{Lattice, norm, sub};
+use super::material::Material;
+
+/// Element flag: pinned by the scene (held by surrounding anatomy); never moved.
+pub(crate) const PINNED: u8 = 1;
+/// Element flag: held by an instrument; moved only as the grasp's source.
+pub(crate) const HELD: u8 = 2;
+/// Either flag: the element is not moved by the chain reaction of another element, nor by relaxation.
+pub(crate) const FIXED: u8 = PINNED | HELD;
+
+/// Link state: intact.
+pub(crate) const INTACT: u8 = 0;
+
+/// Why a link broke.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub enum BreakReason {
+    /// Cut by an instrument.
+    Cut = 1,
+    /// Torn by over-stretching.
+    Tear = 2,
+}
+
+/// A lattice with state: what moves.
+#[derive(Clone, Debug)]
+pub struct Body {
+    pub(crate) lattice: Lattice,
+    pub(crate) pos: Vec<[f32; 3]>,
+    pub(crate) flags: Vec<u8>,
+    pub(crate) materials: Vec<Material>,
+    pub(crate) link_material: Vec<MaterialId>,
+    /// Constraint box `[lo, hi]` on `p[b] - p[a]`, with the wrap jump folded in.
+    pub(crate) link_box: Vec<[[f32; 3]; 2]>,
+    pub(crate) link_state: Vec<u8>,
+    /// Relaxation weight per adjacency entry: the link's stiffness, 0 when broken.
+    pub(crate) adj_w: Vec<f32>,
+}
+
+impl Body {
+    /// A body at rest with every link of `material`.
+    pub fn new(lattice: Lattice, material: Material) -> Result<Self, ChainMailError> {
+        material.validate()?;
+        let n = lattice.element_count();
+        let m = lattice.link_count();
+        let mut body = Self {
+            pos: lattice.rest.clone(),
+            flags: vec![0; n],
+            materials: vec![material],
+            link_material: vec![MaterialId(0); m],
+            link_box: vec![[[0.0; 3]; 2]; m],
+            link_state: vec![INTACT; m],
+            adj_w: vec![material.stiffness; lattice.adj_nbr.len()],
+            lattice,
+        };
+        for l in 0..m {
+            body.update_link_box(l);
+        }
+        Ok(body)
+    }
+
+    fn update_link_box(&mut self, l: usize) {
+        let lat = &self.lattice;
+        let mat = &self.materials[self.link_material[l].index()];
+        let (lo, hi) = mat.link_box(lat.rest_offset[l], lat.axis[l] as usize, lat.scale[l]);
+        let j = lat.jump[l];
+        self.link_box[l] = [sub(lo, j), sub(hi, j)];
+        if self.link_state[l] == INTACT {
+            let [sa, sb] = lat.link_slots[l];
+            self.adj_w[sa as usize] = mat.stiffness;
+            self.adj_w[sb as usize] = mat.stiffness;
+        }
+    }
+
+    /// The lattice this body is built on.
+    pub fn lattice(&self) -> &Lattice {
+        &self.lattice
+    }
+
+    /// Number of elements.
+    pub fn element_count(&self) -> usize {
+        self.pos.len()
+    }
+
+    /// Number of links.
+    pub fn link_count(&self) -> usize {
+        self.link_state.len()
+    }
+
+    /// Current positions, lattice coordinates.
+    pub fn positions(&self) -> &[[f32; 3]] {
+        &self.pos
+    }
+
+    /// Current position of one element.
+    pub fn position(&self, e: ElementId) -> Result<[f32; 3], ChainMailError> {
+        self.check_element(e)?;
+        Ok(self.pos[e.index()])
+    }
+
+    /// Sets an element's position directly, without a chain reaction (for set-up and tests).
+    pub fn set_position(&mut self, e: ElementId, p: [f32; 3]) -> Result<(), ChainMailError> {
+        self.check_element(e)?;
+        for &x in &p {
+            super::error::finite("position", x)?;
+        }
+        self.pos[e.index()] = p;
+        Ok(())
+    }
+
+    /// Puts every element back at its rest position (broken links stay broken).
+    pub fn reset_to_rest(&mut self) {
+        self.pos.copy_from_slice(&self.lattice.rest);
+    }
+
+    pub(crate) fn check_element(&self, e: ElementId) -> Result<(), ChainMailError> {
+        if e.index() < self.pos.len() {
+            Ok(())
+        } else {
+            Err(ChainMailError::ElementOutOfRange { id: e.0, count: self.pos.len() })
+        }
+    }
+
+    fn check_link(&self, l: LinkId) -> Result<(), ChainMailError> {
+        if l.index() < self.link_state.len() {
+            Ok(())
+        } else {
+            Err(ChainMailError::LinkOutOfRange { id: l.0, count: self.link_state.len() })
+        }
+    }
+
+    /// Pins or unpins an element: a pinned element never moves, and a deformation that would have to
+    /// move it is cut back to what it allows.
+    pub fn set_pinned(&mut self, e: ElementId, pinned: bool) -> Result<(), ChainMailError> {
+        self.set_flag(e, PINNED, pinned)
+    }
+
+    /// Marks an element as held by an instrument: it moves only as the source of a deformation.
+    pub fn set_held(&mut self, e: ElementId, held: bool) -> Result<(), ChainMailError> {
+        self.set_flag(e, HELD, held)
+    }
+
+    fn set_flag(&mut self, e: ElementId, flag: u8, on: bool) -> Result<(), ChainMailError> {
+        self.check_element(e)?;
+        let f = &mut self.flags[e.index()];
+        if on {
+            *f |= flag
+        } else {
+            *f &= !flag
+        }
+        Ok(())
+    }
+
+    /// Whether an element is pinned.
+    pub fn is_pinned(&self, e: ElementId) -> bool {
+        self.flags.get(e.index()).is_some_and(|f| f & PINNED != 0)
+    }
+
+    /// Whether an element is held by an instrument.
+    pub fn is_held(&self, e: ElementId) -> bool {
+        self.flags.get(e.index()).is_some_and(|f| f & HELD != 0)
+    }
+
+    /// Adds a material to the body's table.
+    pub fn add_material(&mut self, material: Material) -> Result<MaterialId, ChainMailError> {
+        material.validate()?;
+        if self.materials.len() > u16::MAX as usize {
+            return Err(ChainMailError::TooManyMaterials(u16::MAX as usize + 1));
+        }
+        self.materials.push(material);
+        Ok(MaterialId((self.materials.len() - 1) as u16))
+    }
+
+    /// A material of the table.
+    pub fn material(&self, id: MaterialId) -> Option<&Material> {
+        self.materials.get(id.index())
+    }
+
+    /// All materials, indexed by [`MaterialId`].
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// Replaces a material's parameters, for every link that uses it (live tuning).
+    pub fn set_material(&mut self, id: MaterialId, material: Material) -> Result<(), ChainMailError> {
+        material.validate()?;
+        let count = self.materials.len();
+        let slot = self
+            .materials
+            .get_mut(id.index())
+            .ok_or(ChainMailError::MaterialOutOfRange { id: id.0, count })?;
+        *slot = material;
+        for l in 0..self.link_material.len() {
+            if self.link_material[l] == id {
+                self.update_link_box(l);
+            }
+        }
+        Ok(())
+    }
+
+    /// The material of a link.
+    pub fn link_material(&self, l: LinkId) -> Option<MaterialId> {
+        self.link_material.get(l.index()).copied()
+    }
+
+    /// Gives one link another material.
+    pub fn set_link_material(&mut self, l: LinkId, id: MaterialId) -> Result<(), ChainMailError> {
+        self.check_link(l)?;
+        if id.index() >= self.materials.len() {
+            return Err(ChainMailError::MaterialOutOfRange { id: id.0, count: self.materials.len() });
+        }
+        self.link_material[l.index()] = id;
+        self.update_link_box(l.index());
+        Ok(())
+    }
+
+    /// Gives material `id` to every link whose two ends' rest positions satisfy `region`: one body can
+    /// be soft here and stiff there. Returns how many links changed.
+    pub fn set_material_where(
+        &mut self,
+        id: MaterialId,
+        mut region: impl FnMut([f32; 3], [f32; 3]) -> bool,
+    ) -> Result<usize, ChainMailError> {
+        if id.index() >= self.materials.len() {
+            return Err(ChainMailError::MaterialOutOfRange { id: id.0, count: self.materials.len() });
+        }
+        let mut changed = 0;
+        for l in 0..self.link_material.len() {
+            let [a, b] = self.lattice.ends[l];
+            if region(self.lattice.rest[a as usize], self.lattice.rest[b as usize]) {
+                self.link_material[l] = id;
+                self.update_link_box(l);
+                changed += 1;
+            }
+        }
+        Ok(changed)
+    }
+
+    /// Breaks a link (a cut or a tear). Returns `true` if it was intact.
+    pub fn break_link(&mut self, l: LinkId, reason: BreakReason) -> Result<bool, ChainMailError> {
+        self.check_link(l)?;
+        let i = l.index();
+        if self.link_state[i] != INTACT {
+            return Ok(false);
+        }
+        self.link_state[i] = reason as u8;
+        let [sa, sb] = self.lattice.link_slots[i];
+        self.adj_w[sa as usize] = 0.0;
+        self.adj_w[sb as usize] = 0.0;
+        Ok(true)
+    }
+
+    /// Whether a link is broken, and why.
+    pub fn link_broken(&self, l: LinkId) -> Option<BreakReason> {
+        match self.link_state.get(l.index()) {
+            Some(1) => Some(BreakReason::Cut),
+            Some(2) => Some(BreakReason::Tear),
+            _ => None,
+        }
+    }
+
+    /// Whether a link is intact.
+    pub fn link_intact(&self, l: LinkId) -> bool {
+        self.link_state.get(l.index()) == Some(&INTACT)
+    }
+
+    /// The current offset `p[b] - p[a]` of a link, unwrapped across seams, in lattice coordinates.
+    pub fn link_offset(&self, l: LinkId) -> Option<[f32; 3]> {
+        let &[a, b] = self.lattice.ends.get(l.index())?;
+        let d = sub(self.pos[b as usize], self.pos[a as usize]);
+        let j = self.lattice.jump[l.index()];
+        Some([d[0] + j[0], d[1] + j[1], d[2] + j[2]])
+    }
+
+    /// A link's length over its rest length, in lattice coordinates.
+    pub fn link_stretch(&self, l: LinkId) -> Option<f32> {
+        let d = self.link_offset(l)?;
+        Some(norm(d) / norm(self.lattice.rest_offset[l.index()]))
+    }
+
+    /// How far a link's current offset lies outside its constraint box (0 when it holds).
+    pub fn link_violation(&self, l: LinkId) -> Option<f32> {
+        let &[a, b] = self.lattice.ends.get(l.index())?;
+        let d = sub(self.pos[b as usize], self.pos[a as usize]);
+        let [lo, hi] = self.link_box[l.index()];
+        let mut s = 0.0f32;
+        for k in 0..3 {
+            let e = if d[k] < lo[k] {
+                lo[k] - d[k]
+            } else if d[k] > hi[k] {
+                d[k] - hi[k]
+            } else {
+                0.0
+            };
+            s += e * e;
+        }
+        Some(s.sqrt())
+    }
+
+    /// The constraint box of a link on `p[b] - p[a]`, lattice coordinates.
+    pub fn link_limits(&self, l: LinkId) -> Option<[[f32; 3]; 2]> {
+        self.link_box.get(l.index()).copied()
+    }
+
+    /// Relaxation energy: half the sum over intact links of stiffness times the squared distance
+    /// between the link's current and rest offsets.
+    pub fn energy(&self) -> f64 {
+        let lat = &self.lattice;
+        let mut e = 0.0f64;
+        for (l, &[a, b]) in lat.ends.iter().enumerate() {
+            if self.link_state[l] != INTACT {
+                continue;
+            }
+            let w = self.materials[self.link_material[l].index()].stiffness as f64;
+            let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
+            let (ra, rb) = (lat.rest[a as usize], lat.rest[b as usize]);
+            let mut s = 0.0f64;
+            for k in 0..3 {
+                let d = (pb[k] - rb[k]) as f64 - (pa[k] - ra[k]) as f64;
+                s += d * d;
+            }
+            e += 0.5 * w * s;
+        }
+        e
+    }
+}

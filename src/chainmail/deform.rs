@@ -1,0 +1,297 @@
+//! The chain reaction: one element is moved, its neighbours follow only as far as their links demand.
+
+use super::body::{Body, FIXED, INTACT};
+use super::error::{ChainMailError, finite};
+use super::ids::ElementId;
+use super::lattice::SIDE_B;
+
+/// Which coordinates a deformation constrains and moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Pass {
+    /// All three coordinates: Gibson's 3D ChainMail.
+    #[default]
+    All,
+    /// The first two coordinates only: SurfaceChainMail's pass in the (u, v) plane.
+    Plane,
+    /// The third coordinate only: SurfaceChainMail's pass along the surface normal.
+    Normal,
+}
+
+impl Pass {
+    const fn mask(self) -> [bool; 3] {
+        match self {
+            Pass::All => [true; 3],
+            Pass::Plane => [true, true, false],
+            Pass::Normal => [false, false, true],
+        }
+    }
+}
+
+/// How many times a blocked deformation is halved while searching for the largest one allowed.
+const BISECT_STEPS: u32 = 20;
+
+/// Scratch for deformations and relaxation. Sized once per body; no step allocates.
+#[derive(Clone, Debug, Default)]
+pub struct Workspace {
+    /// `stamp[i] == generation` when element `i` moved in the current deformation.
+    stamp: Vec<u32>,
+    generation: u32,
+    /// Position before the current deformation, valid where stamped.
+    old: Vec<[f32; 3]>,
+    /// The sponsor of each moved element (itself for the source), valid where stamped.
+    sponsor: Vec<u32>,
+    /// Elements moved by the current deformation, in order.
+    pub(crate) moved: Vec<u32>,
+    /// Candidates `[element, link | side, sponsor]`; each moved element adds at most its degree.
+    queue: Vec<[u32; 3]>,
+    /// Relaxation's second buffer.
+    pub(crate) next: Vec<[f32; 3]>,
+}
+
+/// What a deformation did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Deformation {
+    /// Where the source element was asked to go.
+    pub requested: [f32; 3],
+    /// Where it went: `requested` unless pinned elements stopped it short.
+    pub achieved: [f32; 3],
+    /// Share of the requested displacement that was achieved, in `[0, 1]`.
+    pub fraction: f32,
+    /// Elements moved, the source included.
+    pub moved: u32,
+    /// Chain reactions tried (1 when nothing blocked).
+    pub attempts: u32,
+}
+
+impl Workspace {
+    /// A workspace sized for `body`.
+    pub fn new(body: &Body) -> Self {
+        let mut ws = Self::default();
+        ws.fit(body);
+        ws
+    }
+
+    /// Resizes for `body` if needed (allocates only when the body grew).
+    pub fn fit(&mut self, body: &Body) {
+        let n = body.element_count();
+        if self.stamp.len() != n {
+            self.stamp = vec![0; n];
+            self.generation = 0;
+            self.old = vec![[0.0; 3]; n];
+            self.sponsor = vec![0; n];
+            self.next = vec![[0.0; 3]; n];
+            self.moved = Vec::with_capacity(n);
+        }
+        let q = body.lattice.adj_nbr.len() + 1;
+        if self.queue.capacity() < q {
+            self.queue = Vec::with_capacity(q);
+        }
+    }
+
+    /// Elements moved by the last deformation, in the order they moved (the source first).
+    pub fn moved(&self) -> impl ExactSizeIterator<Item = ElementId> + '_ {
+        self.moved.iter().map(|&i| ElementId(i))
+    }
+
+    /// The sponsor of an element moved by the last deformation (the source is its own sponsor).
+    pub fn sponsor(&self, e: ElementId) -> Option<ElementId> {
+        let i = e.index();
+        (self.stamp.get(i) == Some(&self.generation) && self.generation != 0)
+            .then(|| ElementId(self.sponsor[i]))
+    }
+
+    /// An element's position before the last deformation, if it moved.
+    pub fn old_position(&self, e: ElementId) -> Option<[f32; 3]> {
+        self.sponsor(e).map(|_| self.old[e.index()])
+    }
+
+    fn next_generation(&mut self) {
+        if self.generation == u32::MAX {
+            self.stamp.fill(0);
+            self.generation = 0;
+        }
+        self.generation += 1;
+        self.moved.clear();
+        self.queue.clear();
+    }
+
+    fn rollback(&mut self, pos: &mut [[f32; 3]]) {
+        for &i in &self.moved {
+            pos[i as usize] = self.old[i as usize];
+        }
+        // Forget the moves: a fresh generation unstamps them.
+        self.next_generation();
+    }
+}
+
+#[inline(always)]
+fn clamp_to(p: [f32; 3], lo: [f32; 3], hi: [f32; 3], mask: [bool; 3]) -> [f32; 3] {
+    let mut q = p;
+    for k in 0..3 {
+        if mask[k] {
+            q[k] = p[k].max(lo[k]).min(hi[k]);
+        }
+    }
+    q
+}
+
+#[inline(always)]
+fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
+    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+}
+
+impl Body {
+    /// Moves element `source` towards `target` (lattice coordinates) and lets the chain reaction
+    /// carry its neighbours. If the move would have to displace a pinned or held element, it is rolled
+    /// back and the largest permissible fraction is found by bisection; the result says how far the
+    /// source really went. Every element moves at most once.
+    pub fn deform(
+        &mut self,
+        ws: &mut Workspace,
+        source: ElementId,
+        target: [f32; 3],
+        pass: Pass,
+    ) -> Result<Deformation, ChainMailError> {
+        self.check_element(source)?;
+        for &x in &target {
+            finite("deformation target", x)?;
+        }
+        ws.fit(self);
+        let start = self.pos[source.index()];
+        let mask = pass.mask();
+        let mut goal = start;
+        for k in 0..3 {
+            if mask[k] {
+                goal[k] = target[k];
+            }
+        }
+        let mut result =
+            Deformation { requested: goal, achieved: start, fraction: 0.0, moved: 0, attempts: 0 };
+        if self.flags[source.index()] & super::body::PINNED != 0 || goal == start {
+            ws.next_generation();
+            return Ok(result);
+        }
+        let at = |t: f32| -> [f32; 3] {
+            if t >= 1.0 { goal } else { [0, 1, 2].map(|k| start[k] + t * (goal[k] - start[k])) }
+        };
+        result.attempts = 1;
+        if self.chain_reaction(ws, source.index(), goal, mask) {
+            result.achieved = goal;
+            result.fraction = 1.0;
+            result.moved = ws.moved.len() as u32;
+            return Ok(result);
+        }
+        let (mut lo, mut hi) = (0.0f32, 1.0f32);
+        for _ in 0..BISECT_STEPS {
+            let mid = 0.5 * (lo + hi);
+            result.attempts += 1;
+            if self.chain_reaction(ws, source.index(), at(mid), mask) {
+                lo = mid;
+                ws.rollback(&mut self.pos);
+            } else {
+                hi = mid;
+            }
+        }
+        if lo > 0.0 {
+            result.attempts += 1;
+            if self.chain_reaction(ws, source.index(), at(lo), mask) {
+                result.achieved = at(lo);
+                result.fraction = lo;
+                result.moved = ws.moved.len() as u32;
+                return Ok(result);
+            }
+        }
+        ws.next_generation();
+        Ok(result)
+    }
+
+    /// One chain reaction with the source moved to `goal`. On success the moves stay (recorded in the
+    /// workspace); when a fixed element would have to move, everything is rolled back and `false`
+    /// returned.
+    fn chain_reaction(&mut self, ws: &mut Workspace, source: usize, goal: [f32; 3], mask: [bool; 3]) -> bool {
+        ws.next_generation();
+        let generation = ws.generation;
+        let lat = &self.lattice;
+        let pos = &mut self.pos[..];
+        let stamp = &mut ws.stamp[..];
+        let old = &mut ws.old[..];
+        let sponsor = &mut ws.sponsor[..];
+
+        old[source] = pos[source];
+        pos[source] = goal;
+        stamp[source] = generation;
+        sponsor[source] = source as u32;
+        ws.moved.push(source as u32);
+        let (s0, s1) = (lat.adj_start[source] as usize, lat.adj_start[source + 1] as usize);
+        for k in s0..s1 {
+            let link = lat.adj_link[k];
+            if self.link_state[(link & !SIDE_B) as usize] == INTACT {
+                ws.queue.push([lat.adj_nbr[k], link, source as u32]);
+            }
+        }
+
+        let mut head = 0;
+        let mut blocked = false;
+        while head < ws.queue.len() {
+            let [c, link, s] = ws.queue[head];
+            head += 1;
+            let c = c as usize;
+            if stamp[c] == generation {
+                continue;
+            }
+            let l = (link & !SIDE_B) as usize;
+            let [lo, hi] = self.link_box[l];
+            let ps = pos[s as usize];
+            // The sponsor is the link's `a` end unless the entry was taken from `b`'s list.
+            let (blo, bhi) = if link & SIDE_B == 0 {
+                ([ps[0] + lo[0], ps[1] + lo[1], ps[2] + lo[2]], [ps[0] + hi[0], ps[1] + hi[1], ps[2] + hi[2]])
+            } else {
+                ([ps[0] - hi[0], ps[1] - hi[1], ps[2] - hi[2]], [ps[0] - lo[0], ps[1] - lo[1], ps[2] - lo[2]])
+            };
+            let pc = pos[c];
+            let q = clamp_to(pc, blo, bhi, mask);
+            if q == pc {
+                continue;
+            }
+            if self.flags[c] & FIXED != 0 {
+                // A fixed element may be left where it is only if the move does not make its link worse
+                // than it was before this deformation (relaxation can leave links slightly outside).
+                let po = old[s as usize];
+                let shift = [po[0] - ps[0], po[1] - ps[1], po[2] - ps[2]];
+                let before = clamp_to(
+                    pc,
+                    [blo[0] + shift[0], blo[1] + shift[1], blo[2] + shift[2]],
+                    [bhi[0] + shift[0], bhi[1] + shift[1], bhi[2] + shift[2]],
+                    mask,
+                );
+                let scale = (hi[0] - lo[0]).abs().max((hi[1] - lo[1]).abs()).max((hi[2] - lo[2]).abs())
+                    + (lo[0].abs() + lo[1].abs() + lo[2].abs());
+                let tol = 1e-5 * scale;
+                if dist2(q, pc).sqrt() > dist2(before, pc).sqrt() + tol {
+                    blocked = true;
+                    break;
+                }
+                continue;
+            }
+            old[c] = pc;
+            pos[c] = q;
+            stamp[c] = generation;
+            sponsor[c] = s;
+            ws.moved.push(c as u32);
+            let (s0, s1) = (lat.adj_start[c] as usize, lat.adj_start[c + 1] as usize);
+            for k in s0..s1 {
+                let n = lat.adj_nbr[k];
+                let link = lat.adj_link[k];
+                if stamp[n as usize] != generation && self.link_state[(link & !SIDE_B) as usize] == INTACT {
+                    ws.queue.push([n, link, c as u32]);
+                }
+            }
+        }
+        if blocked {
+            ws.rollback(&mut self.pos);
+            return false;
+        }
+        true
+    }
+}

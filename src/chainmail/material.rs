@@ -1,0 +1,190 @@
+//! Materials: how far a link may stretch, compress and shear, how stiff it is in relaxation, and when
+//! it tears.
+
+use serde::{Deserialize, Serialize};
+
+use super::error::{ChainMailError, finite};
+
+/// The geometric limits of a link, in one of the two forms of the papers.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+pub enum Limits {
+    /// Li, Brodlie and Phillips: limits relative to the link's rest length `Dist`, for non-uniform
+    /// lattices. Along the link the separation stays within `min_compress·Dist ..= max_stretch·Dist`;
+    /// across it within `±max_shear·Dist`.
+    Relative {
+        /// MaxRelStretch, at least 1. Example: 1.2 lets a link grow by a fifth.
+        max_stretch: f32,
+        /// MinRelCompress, in `(0, 1]`. Example: 0.8.
+        min_compress: f32,
+        /// MaxRelShear, not negative. Example: 0.3.
+        max_shear: f32,
+    },
+    /// Gibson: absolute limits in lattice units (metres on a plain grid), for uniform lattices.
+    Absolute {
+        /// minDx: smallest separation along the link.
+        min_dist: f32,
+        /// maxDx: largest separation along the link.
+        max_dist: f32,
+        /// maxHorizDy: largest offset across the link.
+        max_shear: f32,
+    },
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits::Relative { max_stretch: 1.2, min_compress: 0.8, max_shear: 0.3 }
+    }
+}
+
+/// A link material.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// ChainMail limits. Default: relative, stretch 1.2, compress 0.8, shear 0.3.
+    #[serde(default)]
+    pub limits: Limits,
+    /// Weight of the link in relaxation (dimensionless, relative to other materials). Default 1.
+    #[serde(default = "one")]
+    pub stiffness: f32,
+    /// A link whose length exceeds `tear_ratio` times its rest length breaks (tears). `None`: never.
+    #[serde(default)]
+    pub tear_ratio: Option<f32>,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self { limits: Limits::default(), stiffness: 1.0, tear_ratio: None }
+    }
+}
+
+impl Material {
+    /// A material that does not deform at all: the body moves as one.
+    pub fn rigid() -> Self {
+        Self {
+            limits: Limits::Relative { max_stretch: 1.0, min_compress: 1.0, max_shear: 0.0 },
+            ..Self::default()
+        }
+    }
+
+    /// Relative limits with the given stretch, compress and shear.
+    pub fn relative(max_stretch: f32, min_compress: f32, max_shear: f32) -> Self {
+        Self { limits: Limits::Relative { max_stretch, min_compress, max_shear }, ..Self::default() }
+    }
+
+    /// Checks that the limits can hold: finite, stretch at least 1, compress in (0, 1], shear not
+    /// negative, stiffness positive, tear ratio above the stretch limit.
+    pub fn validate(&self) -> Result<(), ChainMailError> {
+        match self.limits {
+            Limits::Relative { max_stretch, min_compress, max_shear } => {
+                finite("max_stretch", max_stretch)?;
+                finite("min_compress", min_compress)?;
+                finite("max_shear", max_shear)?;
+                if max_stretch < 1.0 {
+                    return Err(ChainMailError::BadMaterial(format!(
+                        "max_stretch is {max_stretch}, expected at least 1 (a link may not be forced shorter than its rest length by stretching)"
+                    )));
+                }
+                if !(min_compress > 0.0 && min_compress <= 1.0) {
+                    return Err(ChainMailError::BadMaterial(format!(
+                        "min_compress is {min_compress}, expected a value in (0, 1]"
+                    )));
+                }
+                if max_shear < 0.0 {
+                    return Err(ChainMailError::BadMaterial(format!(
+                        "max_shear is {max_shear}, expected 0 or more"
+                    )));
+                }
+            }
+            Limits::Absolute { min_dist, max_dist, max_shear } => {
+                finite("min_dist", min_dist)?;
+                finite("max_dist", max_dist)?;
+                finite("max_shear", max_shear)?;
+                if !(min_dist > 0.0 && min_dist <= max_dist) {
+                    return Err(ChainMailError::BadMaterial(format!(
+                        "min_dist {min_dist} and max_dist {max_dist}: expected 0 < min_dist <= max_dist"
+                    )));
+                }
+                if max_shear < 0.0 {
+                    return Err(ChainMailError::BadMaterial(format!(
+                        "max_shear is {max_shear}, expected 0 or more"
+                    )));
+                }
+            }
+        }
+        finite("stiffness", self.stiffness)?;
+        if self.stiffness <= 0.0 {
+            return Err(ChainMailError::BadMaterial(format!(
+                "stiffness is {}, expected a positive number",
+                self.stiffness
+            )));
+        }
+        if let Some(t) = self.tear_ratio {
+            finite("tear_ratio", t)?;
+            if t <= 1.0 {
+                return Err(ChainMailError::BadMaterial(format!(
+                    "tear_ratio is {t}, expected more than 1 (links would tear at rest)"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The constraint box `[lo, hi]` on a link's offset, for a link of rest offset `rest` (its largest
+    /// component positive, along `axis`) and per-axis reference lengths `scale` (the `Dist` that the
+    /// relative limits multiply, which may differ per axis on a surface lattice).
+    pub(crate) fn link_box(&self, rest: [f32; 3], axis: usize, scale: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+        let mut lo = [0.0; 3];
+        let mut hi = [0.0; 3];
+        for k in 0..3 {
+            if k == axis {
+                let (a, b) = match self.limits {
+                    Limits::Relative { max_stretch, min_compress, .. } => {
+                        (min_compress * rest[k], max_stretch * rest[k])
+                    }
+                    Limits::Absolute { min_dist, max_dist, .. } => (min_dist, max_dist),
+                };
+                lo[k] = a.min(b);
+                hi[k] = a.max(b);
+            } else {
+                let s = match self.limits {
+                    Limits::Relative { max_shear, .. } => max_shear * scale[k],
+                    Limits::Absolute { max_shear, .. } => max_shear,
+                };
+                lo[k] = rest[k] - s;
+                hi[k] = rest[k] + s;
+            }
+        }
+        (lo, hi)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_material_is_valid() {
+        assert!(Material::default().validate().is_ok());
+        assert!(Material::rigid().validate().is_ok());
+    }
+
+    #[test]
+    fn inverted_limits_are_refused() {
+        assert!(Material::relative(0.5, 0.8, 0.1).validate().is_err());
+        assert!(Material::relative(1.2, 1.5, 0.1).validate().is_err());
+        assert!(Material::relative(1.2, 0.8, -0.1).validate().is_err());
+        assert!(Material::relative(f32::NAN, 0.8, 0.1).validate().is_err());
+    }
+
+    #[test]
+    fn relative_box_scales_with_rest_length() {
+        let m = Material::relative(1.5, 0.5, 0.25);
+        let (lo, hi) = m.link_box([2.0, 0.0, 0.0], 0, [2.0, 2.0, 2.0]);
+        assert_eq!(lo, [1.0, -0.5, -0.5]);
+        assert_eq!(hi, [3.0, 0.5, 0.5]);
+    }
+}

@@ -1,0 +1,34 @@
+//! The ChainMail engine: Gibson's 3D ChainMail with elastic relaxation, in the relative form of Li,
+//! Brodlie and Phillips so that it runs on non-uniform, wrapped and curvilinear lattices.
+//!
+//! Owns: [`Lattice`] (elements, links, rest shape), [`Body`] (current positions, pins, materials,
+//! broken links), the chain reaction ([`Body::deform`]) and relaxation ([`Body::relax`]), with their
+//! scratch in a [`Workspace`]. Must not import anything graphical (wgpu, winit, egui) nor any other
+//! dissect module: everything else builds on this.
+//!
+//! ## Naming
+//! An *element* is a point of the lattice, a *link* joins two elements. A link's constraint is a box
+//! on the offset `p[b] - p[a]` between its ends, in lattice coordinates; a link along axis `k` with
+//! rest length `D` allows `MinRelCompress·D ..= MaxRelStretch·D` along `k` and `±MaxRelShear·D` across
+//! it. The chain reaction moves an element the minimum distance back into the box of its *sponsor*
+//! (the neighbour whose move made it a candidate); every element moves at most once per deformation.
+//!
+//! ## Generic over topology
+//! Links are an explicit list with a compressed adjacency, so the same chain reaction and relaxation run
+//! on grids (built here), wrapped grids (cylinders, spheres) and, later, triangle and tetrahedral meshes.
+
+mod body;
+mod deform;
+mod error;
+mod ids;
+mod lattice;
+mod material;
+mod relax;
+
+pub use body::{Body, BreakReason};
+pub use deform::{Deformation, Pass, Workspace};
+pub use error::ChainMailError;
+pub use ids::{ElementId, LinkId, MaterialId};
+pub use lattice::{Axis, GridSpec, Lattice, LinkSpec, MAX_ELEMENTS};
+pub use material::{Limits, Material};
+pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};

@@ -1,0 +1,8 @@
+//! The world that advances in fixed steps, and the [`Snapshot`] it hands to whoever draws it.
+//!
+//! Must not import wgpu, winit or egui: the renderer reads a [`Snapshot`] and never reaches into the
+//! engine.
+
+mod snapshot;
+
+pub use snapshot::{CameraSpec, InstrumentKind, InstrumentPose, LayerMesh, Snapshot};
