@@ -14,10 +14,15 @@
 //! | module | owns | may import |
 //! |---|---|---|
 //! | [`chainmail`] | lattices, materials, the chain reaction, relaxation, broken links | std, serde, thiserror |
+//! | [`surface`] | parametric surfaces X(u, v) and the (u, v, h) mapping | chainmail |
+//! | [`tissue`] | layers, connective fibres, pins, grasp and push, contact, cuts, tears, meshes | chainmail, surface |
 //! | [`simulation`] | the world, the fixed-step clock, the snapshot the renderer reads | chainmail and the modules below it |
 //!
 //! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
 //! `training`, `fem`) never imports wgpu, winit or egui.
 
 pub mod chainmail;
+pub mod instrument;
 pub mod simulation;
+pub mod surface;
+pub mod tissue;

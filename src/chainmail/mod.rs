@@ -29,6 +29,7 @@ pub use body::{Body, BreakReason};
 pub use deform::{Deformation, Pass, Workspace};
 pub use error::ChainMailError;
 pub use ids::{ElementId, LinkId, MaterialId};
+pub(crate) use lattice::SIDE_B as SIDE_B_BIT;
 pub use lattice::{Axis, GridSpec, Lattice, LinkSpec, MAX_ELEMENTS};
 pub use material::{Limits, Material};
 pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};

@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 
 use super::body::{Body, FIXED};
 use super::deform::Workspace;
+use super::ids::ElementId;
 
 /// Jacobi damping factor.
 pub const OMEGA: f32 = 0.9;
@@ -119,6 +120,49 @@ impl Body {
         }
         std::mem::swap(&mut self.pos, &mut ws.next);
         change
+    }
+
+    /// Relaxes only the listed elements within `budget` (the rest of the body holds still). Used to
+    /// relax the region an instrument has disturbed, which may span several deformations.
+    pub fn relax_elements(
+        &mut self,
+        ws: &mut Workspace,
+        budget: RelaxBudget,
+        elements: &[ElementId],
+    ) -> RelaxReport {
+        ws.fit(self);
+        let started = budget.max_time.map(|_| Instant::now());
+        let mut report = RelaxReport::default();
+        while report.sweeps < budget.max_sweeps {
+            let mut change = 0.0f32;
+            for &e in elements {
+                let i = e.index();
+                if i >= self.pos.len() {
+                    continue;
+                }
+                let p = self.pos[i];
+                let q = if self.flags[i] & FIXED != 0 { p } else { self.relaxed(i) };
+                change = change.max((q[0] - p[0]).abs()).max((q[1] - p[1]).abs()).max((q[2] - p[2]).abs());
+                ws.next[i] = q;
+            }
+            for &e in elements {
+                if let Some(q) = ws.next.get(e.index()) {
+                    self.pos[e.index()] = *q;
+                }
+            }
+            report.sweeps += 1;
+            report.last_change = change;
+            if change <= budget.tolerance {
+                report.converged = true;
+                break;
+            }
+            if let (Some(t0), Some(limit)) = (started, budget.max_time)
+                && t0.elapsed() >= limit
+            {
+                break;
+            }
+        }
+        report
     }
 
     fn sweep_moved(&mut self, ws: &mut Workspace) -> f32 {

@@ -1,0 +1,302 @@
+//! The world: a tissue and an instrument, advanced one fixed step at a time in named, ordered phases.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::Snapshot;
+use crate::chainmail::RelaxBudget;
+use crate::instrument::{Command, GRASP_REACH, Instrument, PROBE_RADIUS};
+use crate::simulation::InstrumentKind;
+use crate::tissue::{CutSegment, Tissue};
+
+/// The phases of a step, in the order they run.
+pub const PHASES: [&str; 6] =
+    ["input", "chain reaction", "normal pass", "relaxation", "contact", "cuts and tears"];
+
+/// Settings of the step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorldConfig {
+    /// Steps per second.
+    pub rate_hz: f64,
+    /// Relaxation per step. Deterministic runs give sweeps only, no time limit.
+    pub relax: RelaxBudget,
+}
+
+impl Default for WorldConfig {
+    fn default() -> Self {
+        Self { rate_hz: 1000.0, relax: RelaxBudget::sweeps(4) }
+    }
+}
+
+/// What one step did, phase by phase.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct StepCounters {
+    /// The step's number (1 for the first step).
+    pub step: u64,
+    /// Wall time of each phase, microseconds, in the order of [`PHASES`].
+    pub phase_us: [f32; 6],
+    /// Elements moved by the in-plane (or volume) chain reaction, probe pushes included.
+    pub moved_chain: u32,
+    /// Elements moved by the normal pass.
+    pub moved_normal: u32,
+    /// Relaxation sweeps.
+    pub relax_sweeps: u32,
+    /// Layer pairs pushed apart by the contact phase.
+    pub contact_fixes: u32,
+    /// Links cut.
+    pub links_cut: u32,
+    /// Links torn.
+    pub links_torn: u32,
+    /// Share of the requested grasp move the tissue allowed (1 when nothing held it back).
+    pub grasp_fraction: f32,
+}
+
+impl StepCounters {
+    /// Total wall time of the step, microseconds.
+    pub fn total_us(&self) -> f32 {
+        self.phase_us.iter().sum()
+    }
+}
+
+/// A tissue, an instrument, and the clockwork between them.
+pub struct World {
+    tissue: Tissue,
+    instrument: Instrument,
+    config: WorldConfig,
+    commands: Vec<Command>,
+    step: u64,
+    last: StepCounters,
+    elements_moved_total: u64,
+}
+
+fn ms(t: Instant) -> f32 {
+    t.elapsed().as_secs_f32() * 1e6
+}
+
+impl World {
+    /// A world around a tissue.
+    pub fn new(tissue: Tissue, config: WorldConfig) -> Self {
+        Self {
+            tissue,
+            instrument: Instrument::default(),
+            config,
+            commands: Vec::with_capacity(64),
+            step: 0,
+            last: StepCounters::default(),
+            elements_moved_total: 0,
+        }
+    }
+
+    /// The tissue.
+    pub fn tissue(&self) -> &Tissue {
+        &self.tissue
+    }
+
+    /// The tissue, to tune materials live.
+    pub fn tissue_mut(&mut self) -> &mut Tissue {
+        &mut self.tissue
+    }
+
+    /// The instrument.
+    pub fn instrument(&self) -> &Instrument {
+        &self.instrument
+    }
+
+    /// Settings.
+    pub fn config(&self) -> &WorldConfig {
+        &self.config
+    }
+
+    /// Changes the settings (relaxation budget, rate).
+    pub fn set_config(&mut self, config: WorldConfig) {
+        self.config = config;
+    }
+
+    /// Steps run so far.
+    pub fn step_count(&self) -> u64 {
+        self.step
+    }
+
+    /// What the last step did.
+    pub fn last_step(&self) -> &StepCounters {
+        &self.last
+    }
+
+    /// Elements moved by every chain reaction so far.
+    pub fn elements_moved_total(&self) -> u64 {
+        self.elements_moved_total
+    }
+
+    /// Queues a command for the next step.
+    pub fn push(&mut self, command: Command) {
+        self.commands.push(command);
+    }
+
+    /// Advances one fixed step: input, chain reaction, normal pass, relaxation, contact, cuts and tears,
+    /// bookkeeping.
+    pub fn step(&mut self) -> StepCounters {
+        let mut c = StepCounters { step: self.step + 1, grasp_fraction: 1.0, ..StepCounters::default() };
+
+        // Input: consume the commands gathered since the last step.
+        let t = Instant::now();
+        let mut commands = std::mem::take(&mut self.commands);
+        for command in commands.drain(..) {
+            self.apply(command);
+        }
+        self.commands = commands;
+        c.phase_us[0] = ms(t);
+
+        // Chain reaction (in the surface plane, or in 3D for a volume), then the normal pass.
+        let passes = self.tissue.passes();
+        let inst = &mut self.instrument;
+        match (inst.kind, inst.grasped) {
+            (InstrumentKind::Forceps, Some(e)) => {
+                let t = Instant::now();
+                let (moved, f) = self.tissue.pull_pass(e, inst.target, passes[0]);
+                c.moved_chain = moved;
+                c.grasp_fraction = f;
+                c.phase_us[1] = ms(t);
+                if let Some(&normal) = passes.get(1) {
+                    let t = Instant::now();
+                    let (moved, f) = self.tissue.pull_pass(e, inst.target, normal);
+                    c.moved_normal = moved;
+                    c.grasp_fraction = c.grasp_fraction.min(f);
+                    c.phase_us[2] = ms(t);
+                }
+                inst.tip = self.tissue.world_position(e).unwrap_or(inst.target);
+            }
+            (InstrumentKind::Probe, _) => {
+                let t = Instant::now();
+                c.moved_chain = self.tissue.push(inst.target, PROBE_RADIUS);
+                inst.tip = inst.target;
+                c.phase_us[1] = ms(t);
+            }
+            _ => inst.tip = inst.target,
+        }
+
+        // Relaxation within its budget.
+        let t = Instant::now();
+        c.relax_sweeps = self.tissue.relax(self.config.relax).sweeps;
+        c.phase_us[3] = ms(t);
+
+        // Contact between the layers.
+        let t = Instant::now();
+        c.contact_fixes = self.tissue.enforce_contact();
+        c.phase_us[4] = ms(t);
+
+        // Cuts and tears: the one place the topology changes.
+        let t = Instant::now();
+        c.links_cut = self.tissue.apply_cuts();
+        c.links_torn = self.tissue.apply_tears();
+        if let Some(e) = self.instrument.grasped
+            && !self.tissue.body().lattice().neighbours(e).any(|(_, l)| self.tissue.body().link_intact(l))
+        {
+            // The grasped element tore free: nothing left to hold.
+            self.release();
+        }
+        c.phase_us[5] = ms(t);
+
+        // Bookkeeping.
+        self.step += 1;
+        self.elements_moved_total += (c.moved_chain + c.moved_normal) as u64;
+        self.last = c;
+        c
+    }
+
+    fn release(&mut self) {
+        if let Some(e) = self.instrument.grasped.take() {
+            self.tissue.set_held(e, false);
+        }
+    }
+
+    fn apply(&mut self, command: Command) {
+        match command {
+            Command::Select(kind) => {
+                self.release();
+                self.instrument.cutting = false;
+                self.instrument.stroke.clear();
+                self.instrument.kind = kind;
+            }
+            Command::MoveTo(p) => {
+                if !p.iter().all(|x| x.is_finite()) {
+                    return;
+                }
+                let from = self.instrument.target;
+                self.instrument.target = p;
+                if self.instrument.kind == InstrumentKind::Scalpel && self.instrument.cutting && from != p {
+                    self.tissue.queue_cut(CutSegment { from, to: p, depth: self.instrument.depth });
+                    self.instrument.stroke.push(p);
+                }
+            }
+            Command::Grasp => {
+                if self.instrument.kind != InstrumentKind::Forceps || self.instrument.grasped.is_some() {
+                    return;
+                }
+                let tip = self.instrument.target;
+                let top = self.tissue.layers().len().checked_sub(1);
+                // The outermost layer first; the lower one where the upper is out of reach (cut away).
+                let pick = [top, None].into_iter().find_map(|layer| {
+                    let e = self.tissue.nearest_element(tip, layer)?;
+                    let p = self.tissue.world_position(e)?;
+                    let d =
+                        ((p[0] - tip[0]).powi(2) + (p[1] - tip[1]).powi(2) + (p[2] - tip[2]).powi(2)).sqrt();
+                    (d <= GRASP_REACH).then_some(e)
+                });
+                if let Some(e) = pick {
+                    self.grasp(e);
+                }
+            }
+            Command::GraspElement(e) => {
+                if self.instrument.kind == InstrumentKind::Forceps
+                    && self.instrument.grasped.is_none()
+                    && self.tissue.world_position(e).is_some()
+                {
+                    self.grasp(e);
+                }
+            }
+            Command::Release => self.release(),
+            Command::SetDepth(d) => self.instrument.depth = d,
+            Command::BeginCut => {
+                if self.instrument.kind == InstrumentKind::Scalpel {
+                    self.instrument.cutting = true;
+                    self.instrument.stroke.clear();
+                    self.instrument.stroke.push(self.instrument.target);
+                }
+            }
+            Command::EndCut => self.instrument.cutting = false,
+            Command::Roll(r) => {
+                if r.is_finite() {
+                    self.instrument.roll = r;
+                }
+            }
+            Command::SetAxis(a) => {
+                let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                if l.is_finite() && l > 0.0 {
+                    self.instrument.axis = [a[0] / l, a[1] / l, a[2] / l];
+                }
+            }
+        }
+    }
+
+    fn grasp(&mut self, e: crate::chainmail::ElementId) {
+        self.instrument.grasped = Some(e);
+        self.tissue.set_held(e, true);
+        if let Some(p) = self.tissue.world_position(e) {
+            self.instrument.target = p;
+            self.instrument.tip = p;
+        }
+    }
+
+    /// Refills a snapshot in place.
+    pub fn snapshot_into(&self, out: &mut Snapshot) {
+        out.step = self.step;
+        self.tissue.fill_meshes(&mut out.layers);
+        self.tissue.fill_fibres(&mut out.fibres);
+        out.instrument = Some(self.instrument.pose());
+        out.cut_path.clear();
+        if self.instrument.cutting {
+            out.cut_path.extend_from_slice(&self.instrument.stroke);
+        }
+    }
+}

@@ -1,0 +1,499 @@
+//! Building a tissue from its description: the `(u, v, h)` lattice of one or two layers with their
+//! connective fibres, or a volume; pins; render triangles.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use super::{Damage, Geometry, Layer, LinkKind, Tissue};
+use crate::chainmail::{
+    Body, ChainMailError, ElementId, GridSpec, Lattice, LinkId, LinkSpec, MAX_ELEMENTS, Material, Workspace,
+};
+use crate::surface::Surface;
+
+/// Why a tissue could not be built.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum TissueError {
+    /// The engine refused the lattice or a material.
+    #[error(transparent)]
+    Engine(#[from] ChainMailError),
+    /// A parameter that cannot work.
+    #[error("{field}: {reason}")]
+    Invalid {
+        /// The parameter, as named in scenes.
+        field: String,
+        /// What is wrong and what is expected.
+        reason: String,
+    },
+}
+
+fn invalid(field: &str, reason: impl Into<String>) -> TissueError {
+    TissueError::Invalid { field: field.into(), reason: reason.into() }
+}
+
+/// Which elements are pinned.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub enum Pinning {
+    /// Nothing pinned.
+    None,
+    /// Every edge of a non-wrapped axis (a plane's four edges, a cylinder's two ends); for a volume,
+    /// its base (the lowest `y` face).
+    #[default]
+    Boundary,
+    /// The listed edges of the `(u, v)` grid.
+    Edges(Vec<Edge>),
+}
+
+/// An edge of the `(u, v)` grid.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Edge {
+    /// The first column.
+    UMin,
+    /// The last column.
+    UMax,
+    /// The first row.
+    VMin,
+    /// The last row.
+    VMax,
+}
+
+/// One layer of a layered tissue.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayerSpec {
+    /// Name shown to the trainee.
+    pub name: String,
+    /// Linear RGBA colour.
+    pub color: [f32; 4],
+    /// Offset along the surface normal from the base surface, metres.
+    pub offset: f32,
+    /// The layer's material.
+    pub material: Material,
+}
+
+/// The fibres joining two layers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConnectiveSpec {
+    /// Their material: limits relative to the gap between the layers.
+    pub material: Material,
+    /// Share of element pairs joined, in `(0, 1]`; the pattern is deterministic.
+    pub density: f32,
+    /// The layers never come closer than this along the normal, metres.
+    pub min_gap: f32,
+}
+
+/// Layers on a parametric surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayeredSpec {
+    /// The base surface.
+    pub surface: Surface,
+    /// Elements along `u` and `v`.
+    pub resolution: [usize; 2],
+    /// Optional non-uniform `u` positions, fractions in `[0, 1]`.
+    pub u_coords: Option<Vec<f32>>,
+    /// Optional non-uniform `v` positions, fractions in `[0, 1]`.
+    pub v_coords: Option<Vec<f32>>,
+    /// One or two layers, upper first.
+    pub layers: Vec<LayerSpec>,
+    /// Fibres between two layers.
+    pub connective: Option<ConnectiveSpec>,
+    /// Pinned elements.
+    pub pinned: Pinning,
+}
+
+/// A ChainMail volume: a box of elements, world coordinates, base at `y = 0`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VolumeSpec {
+    /// Size along x, y, z, metres.
+    pub size: [f32; 3],
+    /// Elements along x, y, z.
+    pub resolution: [usize; 3],
+    /// Material.
+    pub material: Material,
+    /// Colour of its surface.
+    pub color: [f32; 4],
+    /// Pin the base.
+    pub pinned: Pinning,
+}
+
+/// What to build.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TissueSpec {
+    /// SurfaceChainMail layers.
+    Layered(LayeredSpec),
+    /// A 3D ChainMail volume.
+    Volume(VolumeSpec),
+}
+
+impl Tissue {
+    /// Builds a tissue. Nothing is half-built: any error leaves no tissue.
+    pub fn build(spec: &TissueSpec) -> Result<Self, TissueError> {
+        match spec {
+            TissueSpec::Layered(s) => build_layered(s),
+            TissueSpec::Volume(s) => build_volume(s),
+        }
+    }
+}
+
+fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn check_fracs(field: &str, f: &Option<Vec<f32>>, n: usize, wrapped: bool) -> Result<(), TissueError> {
+    let Some(f) = f else { return Ok(()) };
+    if f.len() != n {
+        return Err(invalid(field, format!("has {} values, expected one per element ({n})", f.len())));
+    }
+    if f.iter().any(|x| !x.is_finite() || *x < 0.0 || *x > 1.0 || (wrapped && *x >= 1.0)) {
+        return Err(invalid(field, "expected fractions in [0, 1] (below 1 around a wrapped surface)"));
+    }
+    if f.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(invalid(field, "expected strictly increasing fractions"));
+    }
+    Ok(())
+}
+
+fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
+    s.surface.validate().map_err(|r| invalid("surface", r))?;
+    let [nu, nv] = s.resolution;
+    if nu < 2 || nv < 2 {
+        return Err(invalid(
+            "resolution",
+            format!("{nu} x {nv}: expected at least 2 elements along u and v"),
+        ));
+    }
+    let nl = s.layers.len();
+    if !(1..=2).contains(&nl) {
+        return Err(invalid("layers", format!("{nl} layers: expected 1 or 2")));
+    }
+    let total = (nu as u128) * (nv as u128) * (nl as u128);
+    if total > MAX_ELEMENTS as u128 {
+        return Err(invalid(
+            "resolution",
+            format!("{nu} x {nv} x {nl} layers = {total} elements, more than the limit of {MAX_ELEMENTS}"),
+        ));
+    }
+    let wrapped = s.surface.u_period().is_some();
+    if wrapped && nu < 3 {
+        return Err(invalid("resolution", "a wrapped surface needs at least 3 elements around"));
+    }
+    check_fracs("u_coords", &s.u_coords, nu, wrapped)?;
+    check_fracs("v_coords", &s.v_coords, nv, false)?;
+    for (i, l) in s.layers.iter().enumerate() {
+        l.material.validate().map_err(|e| invalid(&format!("layers[{i}].material"), e.to_string()))?;
+        if !l.offset.is_finite() {
+            return Err(invalid(&format!("layers[{i}].offset"), "expected a finite number of metres"));
+        }
+    }
+    // Lattice order: lowest offset first. The scene lists the upper layer first.
+    let mut order: Vec<usize> = (0..nl).collect();
+    order.sort_by(|&a, &b| s.layers[a].offset.total_cmp(&s.layers[b].offset));
+    let offsets: Vec<f32> = order.iter().map(|&i| s.layers[i].offset).collect();
+    let gap = if nl == 2 { offsets[1] - offsets[0] } else { 0.0 };
+    if nl == 2 && gap <= 0.0 {
+        return Err(invalid("layers", "the two layers have the same offset: expected the upper one above"));
+    }
+    let connective = if nl == 2 { s.connective.clone() } else { None };
+    if let Some(c) = &connective {
+        c.material.validate().map_err(|e| invalid("connective.material", e.to_string()))?;
+        if !(c.density > 0.0 && c.density <= 1.0) {
+            return Err(invalid("connective.density", format!("{}: expected a share in (0, 1]", c.density)));
+        }
+        if !(c.min_gap >= 0.0 && c.min_gap < gap) {
+            return Err(invalid(
+                "connective.min_gap",
+                format!("{}: expected at least 0 and below the gap between the layers ({gap})", c.min_gap),
+            ));
+        }
+    }
+
+    let sampling = s.surface.sample(nu, nv, s.u_coords.as_deref(), s.v_coords.as_deref());
+    let sheet = nu * nv;
+    let mut rest = Vec::with_capacity(sheet * nl);
+    for &h in &offsets {
+        for j in 0..nv {
+            for i in 0..nu {
+                rest.push([sampling.u[i], sampling.v[j], h]);
+            }
+        }
+    }
+    let id = |i: usize, j: usize, k: usize| ElementId((i + nu * (j + nv * k)) as u32);
+    let world = |p: [f32; 3]| s.surface.to_world(p);
+    let mut links = Vec::new();
+    let mut kinds = Vec::new();
+    let mut rest_len = Vec::new();
+    for k in 0..nl {
+        for j in 0..nv {
+            for i in 0..nu {
+                // Along u (wrapping), then along v.
+                let last_u = i + 1 == nu;
+                if !last_u || wrapped {
+                    let (i2, du) = if last_u {
+                        (0, sampling.u_period.unwrap_or(0.0) - (sampling.u[nu - 1] - sampling.u[0]))
+                    } else {
+                        (i + 1, sampling.u[i + 1] - sampling.u[i])
+                    };
+                    let (a, b) = (id(i, j, k), id(i2, j, k));
+                    let d3 = dist(world(rest[a.index()]), world(rest[b.index()]));
+                    links.push(LinkSpec { a, b, rest: [du, 0.0, 0.0], scale: [du, du, d3] });
+                    kinds.push(LinkKind::Layer(k as u8));
+                    rest_len.push(d3);
+                }
+                if j + 1 < nv {
+                    let dv = sampling.v[j + 1] - sampling.v[j];
+                    let (a, b) = (id(i, j, k), id(i, j + 1, k));
+                    let d3 = dist(world(rest[a.index()]), world(rest[b.index()]));
+                    links.push(LinkSpec { a, b, rest: [0.0, dv, 0.0], scale: [dv, dv, d3] });
+                    kinds.push(LinkKind::Layer(k as u8));
+                    rest_len.push(d3);
+                }
+            }
+        }
+    }
+    if let Some(c) = &connective {
+        // A deterministic, evenly spread pattern: pair (i, j) is joined when its low-discrepancy
+        // value falls below the density.
+        for j in 0..nv {
+            for i in 0..nu {
+                let x = ((i as f64) * 0.618_033_988_75 + (j as f64) * 0.754_877_666_2).fract();
+                if (x as f32) >= c.density && c.density < 1.0 {
+                    continue;
+                }
+                links.push(LinkSpec {
+                    a: id(i, j, 0),
+                    b: id(i, j, 1),
+                    rest: [0.0, 0.0, gap],
+                    scale: [gap; 3],
+                });
+                kinds.push(LinkKind::Connective);
+                rest_len.push(gap);
+            }
+        }
+    }
+    let mut lattice = Lattice::from_links(rest, &links)?;
+    lattice.dims = Some([nu, nv, nl]);
+    // Material 0 is the lowest layer's; the others follow.
+    let mut body = Body::new(lattice, s.layers[order[0]].material)?;
+    let mut layer_material = vec![crate::chainmail::MaterialId(0)];
+    if nl == 2 {
+        layer_material.push(body.add_material(s.layers[order[1]].material)?);
+    }
+    let connective_material = match &connective {
+        Some(c) => Some(body.add_material(c.material)?),
+        None => None,
+    };
+    for (l, kind) in kinds.iter().enumerate() {
+        let m = match kind {
+            LinkKind::Layer(k) => layer_material[*k as usize],
+            LinkKind::Connective => connective_material.unwrap_or(layer_material[0]),
+        };
+        body.set_link_material(LinkId(l as u32), m)?;
+    }
+    // Pins.
+    let edges: Vec<super::build::Edge> = match &s.pinned {
+        Pinning::None => vec![],
+        Pinning::Boundary if wrapped => {
+            if matches!(s.surface, Surface::Sphere { .. }) {
+                vec![]
+            } else {
+                vec![Edge::VMin, Edge::VMax]
+            }
+        }
+        Pinning::Boundary => vec![Edge::UMin, Edge::UMax, Edge::VMin, Edge::VMax],
+        Pinning::Edges(e) => e.clone(),
+    };
+    for k in 0..nl {
+        for j in 0..nv {
+            for i in 0..nu {
+                let on = edges.iter().any(|e| match e {
+                    Edge::UMin => i == 0,
+                    Edge::UMax => i + 1 == nu,
+                    Edge::VMin => j == 0,
+                    Edge::VMax => j + 1 == nv,
+                });
+                if on {
+                    body.set_pinned(id(i, j, k), true)?;
+                }
+            }
+        }
+    }
+    // Render triangles per layer: each grid quad as two triangles, oriented along the outward normal.
+    let mut layers = Vec::with_capacity(nl);
+    let link_of = |a: ElementId, b: ElementId, body: &Body| -> u32 {
+        body.lattice().neighbours(a).find(|&(n, _)| n == b).map(|(_, l)| l.0).unwrap_or(u32::MAX)
+    };
+    for (k, &src) in order.iter().enumerate() {
+        let spec = &s.layers[src];
+        let mut triangles = Vec::new();
+        let cols = if wrapped { nu } else { nu - 1 };
+        for j in 0..nv - 1 {
+            for i in 0..cols {
+                let i2 = (i + 1) % nu;
+                let (a, b, c, d) = (id(i, j, k), id(i2, j, k), id(i2, j + 1, k), id(i, j + 1, k));
+                let (ab, bc, dc, ad) =
+                    (link_of(a, b, &body), link_of(b, c, &body), link_of(d, c, &body), link_of(a, d, &body));
+                // Orientation: the triangle normal should agree with the surface normal at rest.
+                let (pa, pb, pc) = (
+                    world(body.positions()[a.index()]),
+                    world(body.positions()[b.index()]),
+                    world(body.positions()[c.index()]),
+                );
+                let n = cross(sub(pb, pa), sub(pc, pa));
+                let r = body.positions()[a.index()];
+                let sn = s.surface.normal(r[0], r[1]);
+                let flip = n[0] * sn[0] + n[1] * sn[1] + n[2] * sn[2] < 0.0;
+                let (t1, t2) = if flip {
+                    ([a.0, c.0, b.0], [a.0, d.0, c.0])
+                } else {
+                    ([a.0, b.0, c.0], [a.0, c.0, d.0])
+                };
+                triangles.push((t1, [ab, bc]));
+                triangles.push((t2, [dc, ad]));
+            }
+        }
+        layers.push(Layer {
+            name: spec.name.clone(),
+            color: spec.color,
+            first: (k * sheet) as u32,
+            count: sheet as u32,
+            material: layer_material[k],
+            triangles,
+        });
+    }
+    let spacing = {
+        let du = (sampling.u[nu - 1] - sampling.u[0]) / (nu - 1) as f32;
+        let dv = (sampling.v[nv - 1] - sampling.v[0]) / (nv - 1) as f32;
+        du.min(dv)
+    };
+    let n = body.element_count();
+    let ws = Workspace::new(&body);
+    Ok(Tissue {
+        ws,
+        geometry: Geometry::Surface(s.surface),
+        layers,
+        link_kind: kinds,
+        rest_len,
+        sheet: if nl == 2 { sheet as u32 } else { 0 },
+        min_gap: connective.as_ref().map(|c| c.min_gap).unwrap_or(0.0),
+        active: Vec::with_capacity(n),
+        in_active: vec![false; n],
+        cut_queue: Vec::new(),
+        events: Vec::new(),
+        topology_version: 0,
+        damage: Damage::default(),
+        max_stretch: 1.0,
+        spacing,
+        body,
+    })
+}
+
+fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
+    for (k, &x) in s.size.iter().enumerate() {
+        if !(x.is_finite() && x > 0.0) {
+            return Err(invalid(&format!("size[{k}]"), format!("{x}: expected a positive number of metres")));
+        }
+    }
+    let [nx, ny, nz] = s.resolution;
+    if nx < 2 || ny < 2 || nz < 2 {
+        return Err(invalid("resolution", "expected at least 2 elements along each axis"));
+    }
+    let total = (nx as u128) * (ny as u128) * (nz as u128);
+    if total > MAX_ELEMENTS as u128 {
+        return Err(invalid(
+            "resolution",
+            format!("{total} elements, more than the limit of {MAX_ELEMENTS}"),
+        ));
+    }
+    s.material.validate().map_err(|e| invalid("material", e.to_string()))?;
+    let axis = |n: usize, len: f32, lo: f32| (0..n).map(|i| lo + len * i as f32 / (n - 1) as f32).collect();
+    let spec = GridSpec {
+        coords: [
+            axis(nx, s.size[0], -0.5 * s.size[0]),
+            axis(ny, s.size[1], 0.0),
+            axis(nz, s.size[2], -0.5 * s.size[2]),
+        ],
+        wrap: [None; 3],
+        scale: [1.0; 3],
+    };
+    let lattice = Lattice::grid(&spec)?;
+    let mut body = Body::new(lattice, s.material)?;
+    let id = |i: usize, j: usize, k: usize| ElementId((i + nx * (j + ny * k)) as u32);
+    if s.pinned != Pinning::None {
+        for k in 0..nz {
+            for i in 0..nx {
+                body.set_pinned(id(i, 0, k), true)?;
+            }
+        }
+    }
+    let m = body.link_count();
+    let rest_len: Vec<f32> = (0..m)
+        .map(|l| body.lattice().link_rest(LinkId(l as u32)).map(|r| dist(r, [0.0; 3])).unwrap_or(1.0))
+        .collect();
+    let link_of = |a: ElementId, b: ElementId, body: &Body| -> u32 {
+        body.lattice().neighbours(a).find(|&(n, _)| n == b).map(|(_, l)| l.0).unwrap_or(u32::MAX)
+    };
+    // The outer surface: the quads of the six faces, oriented outwards.
+    let mut triangles = Vec::new();
+    let dims = [nx, ny, nz];
+    for axis in 0..3 {
+        let (p, q) = ((axis + 1) % 3, (axis + 2) % 3);
+        for side in [0, dims[axis] - 1] {
+            for b in 0..dims[q] - 1 {
+                for a in 0..dims[p] - 1 {
+                    let at = |da: usize, db: usize| {
+                        let mut c = [0usize; 3];
+                        c[axis] = side;
+                        c[p] = a + da;
+                        c[q] = b + db;
+                        id(c[0], c[1], c[2])
+                    };
+                    let (e00, e10, e11, e01) = (at(0, 0), at(1, 0), at(1, 1), at(0, 1));
+                    let l = |x, y| link_of(x, y, &body);
+                    let outward = side != 0;
+                    let (t1, t2) = if outward {
+                        ([e00.0, e10.0, e11.0], [e00.0, e11.0, e01.0])
+                    } else {
+                        ([e00.0, e11.0, e10.0], [e00.0, e01.0, e11.0])
+                    };
+                    triangles.push((t1, [l(e00, e10), l(e10, e11)]));
+                    triangles.push((t2, [l(e01, e11), l(e00, e01)]));
+                }
+            }
+        }
+    }
+    let n = body.element_count();
+    let layers = vec![Layer {
+        name: "volume".into(),
+        color: s.color,
+        first: 0,
+        count: n as u32,
+        material: crate::chainmail::MaterialId(0),
+        triangles,
+    }];
+    let ws = Workspace::new(&body);
+    let spacing = (0..3).map(|k| s.size[k] / (dims[k] - 1) as f32).fold(f32::MAX, f32::min);
+    Ok(Tissue {
+        ws,
+        geometry: Geometry::Volume,
+        layers,
+        link_kind: vec![LinkKind::Layer(0); m],
+        rest_len,
+        sheet: 0,
+        min_gap: 0.0,
+        active: Vec::with_capacity(n),
+        in_active: vec![false; n],
+        cut_queue: Vec::new(),
+        events: Vec::new(),
+        topology_version: 0,
+        damage: Damage::default(),
+        max_stretch: 1.0,
+        spacing,
+        body,
+    })
+}
+
+fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}

@@ -1,0 +1,196 @@
+//! Cutting: a blade path removes every link it crosses. Cuts are queued during the step and applied
+//! together in the cut phase.
+
+use serde::{Deserialize, Serialize};
+
+use super::{Geometry, LinkKind, Tissue};
+use crate::chainmail::{BreakReason, LinkId};
+
+/// How deep the blade runs.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum CutDepth {
+    /// Through the upper layer: an incision that opens (in-layer links).
+    Upper,
+    /// Between the layers: the connective fibres.
+    #[default]
+    Between,
+    /// Through the lower layer.
+    Lower,
+}
+
+/// One straight piece of a blade path, world coordinates (metres).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+pub struct CutSegment {
+    /// Start of the piece.
+    pub from: [f32; 3],
+    /// End of the piece.
+    pub to: [f32; 3],
+    /// Depth of the blade.
+    pub depth: CutDepth,
+}
+
+/// Fibres whose foot lies within this many element spacings of the blade are severed, so that a
+/// straight stroke in any direction leaves no fibre standing across it.
+const FIBRE_REACH: f32 = 0.75;
+
+#[inline]
+fn orient(a: [f32; 2], b: [f32; 2], c: [f32; 2]) -> f32 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// Whether 2D segments `ab` and `cd` cross (touching counts).
+#[inline]
+fn segments_cross(a: [f32; 2], b: [f32; 2], c: [f32; 2], d: [f32; 2]) -> bool {
+    let (o1, o2) = (orient(a, b, c), orient(a, b, d));
+    let (o3, o4) = (orient(c, d, a), orient(c, d, b));
+    o1 * o2 <= 0.0 && o3 * o4 <= 0.0 && !(o1 == 0.0 && o2 == 0.0)
+}
+
+#[inline]
+fn point_segment_dist(p: [f32; 2], a: [f32; 2], b: [f32; 2]) -> f32 {
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let q = [a[0] + t * ab[0] - p[0], a[1] + t * ab[1] - p[1]];
+    (q[0] * q[0] + q[1] * q[1]).sqrt()
+}
+
+/// Whether the 3D segment `pq` crosses the quad `a, b, b + down, a + down` (the blade's swept face).
+fn crosses_blade(p: [f32; 3], q: [f32; 3], a: [f32; 3], b: [f32; 3], depth: f32) -> bool {
+    // Plane of the blade: spanned by (b - a) and the vertical.
+    let e = [b[0] - a[0], 0.0, b[2] - a[2]];
+    let n = [-e[2], 0.0, e[0]];
+    let side = |x: [f32; 3]| (x[0] - a[0]) * n[0] + (x[2] - a[2]) * n[2];
+    let (sp, sq) = (side(p), side(q));
+    if sp * sq > 0.0 || sp == sq {
+        return false;
+    }
+    let t = sp / (sp - sq);
+    let x = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]), p[2] + t * (q[2] - p[2])];
+    let len2 = e[0] * e[0] + e[2] * e[2];
+    if len2 <= 0.0 {
+        return false;
+    }
+    let s = ((x[0] - a[0]) * e[0] + (x[2] - a[2]) * e[2]) / len2;
+    let top = a[1] + s * (b[1] - a[1]);
+    (0.0..=1.0).contains(&s) && x[1] <= top + 1e-6 && x[1] >= top - depth
+}
+
+impl Tissue {
+    /// Queues a blade segment; it is applied in the next [`Tissue::apply_cuts`].
+    pub fn queue_cut(&mut self, segment: CutSegment) {
+        self.cut_queue.push(segment);
+    }
+
+    /// Applies every queued cut; returns how many links it severed.
+    pub fn apply_cuts(&mut self) -> u32 {
+        let mut count = 0;
+        let queue = std::mem::take(&mut self.cut_queue);
+        for seg in &queue {
+            count += self.cut_segment(seg);
+        }
+        // Give the buffer back so the next step does not allocate.
+        self.cut_queue = queue;
+        self.cut_queue.clear();
+        count
+    }
+
+    fn cut_segment(&mut self, seg: &CutSegment) -> u32 {
+        let mut cut = 0;
+        match self.geometry {
+            Geometry::Surface(surface) => {
+                let a = surface.to_lattice(seg.from, 0.0);
+                let b = surface.to_lattice(seg.to, a[0]);
+                let (a2, b2) = ([a[0], a[1]], [b[0], b[1]]);
+                let period = surface.u_period();
+                let mid_u = 0.5 * (a[0] + b[0]);
+                let nl = self.layers.len() as u8;
+                let want = match seg.depth {
+                    CutDepth::Upper => LinkKind::Layer(nl - 1),
+                    CutDepth::Lower => LinkKind::Layer(0),
+                    CutDepth::Between if nl == 2 => LinkKind::Connective,
+                    CutDepth::Between => return 0,
+                };
+                let reach = FIBRE_REACH * self.spacing;
+                for l in 0..self.body.link_count() {
+                    if self.link_kind[l] != want {
+                        continue;
+                    }
+                    let id = LinkId(l as u32);
+                    if !self.body.link_intact(id) {
+                        continue;
+                    }
+                    let (Some([ea, _]), Some(off)) =
+                        (self.body.lattice().link_ends(id), self.body.link_offset(id))
+                    else {
+                        continue;
+                    };
+                    let pa = self.body.positions()[ea.index()];
+                    // Bring the link next to the blade across a wrap seam.
+                    let shift = period.map(|p| ((mid_u - pa[0]) / p).round() * p).unwrap_or(0.0);
+                    let p = [pa[0] + shift, pa[1]];
+                    let q = [p[0] + off[0], p[1] + off[1]];
+                    let hit = if want == LinkKind::Connective {
+                        point_segment_dist([0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])], a2, b2) <= reach
+                    } else {
+                        segments_cross(p, q, a2, b2)
+                    };
+                    if hit && self.break_link(id, BreakReason::Cut) {
+                        cut += 1;
+                    }
+                }
+            }
+            Geometry::Volume => {
+                let height = self
+                    .body
+                    .lattice()
+                    .rest_positions()
+                    .iter()
+                    .fold((f32::MAX, f32::MIN), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])));
+                let h = height.1 - height.0;
+                let depth = match seg.depth {
+                    CutDepth::Upper => h / 3.0,
+                    CutDepth::Between => 2.0 * h / 3.0,
+                    CutDepth::Lower => h * 1.01,
+                };
+                for l in 0..self.body.link_count() {
+                    let id = LinkId(l as u32);
+                    if !self.body.link_intact(id) {
+                        continue;
+                    }
+                    let Some([ea, eb]) = self.body.lattice().link_ends(id) else { continue };
+                    let (pa, pb) = (self.body.positions()[ea.index()], self.body.positions()[eb.index()]);
+                    if crosses_blade(pa, pb, seg.from, seg.to, depth) && self.break_link(id, BreakReason::Cut)
+                    {
+                        cut += 1;
+                    }
+                }
+            }
+        }
+        cut
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crossing_segments() {
+        assert!(segments_cross([0.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 0.0]));
+        assert!(!segments_cross([0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]));
+        assert!(!segments_cross([0.0, 0.0], [1.0, 0.0], [2.0, -1.0], [2.0, 1.0]));
+    }
+
+    #[test]
+    fn blade_face() {
+        let (a, b) = ([0.0, 1.0, 0.0], [1.0, 1.0, 0.0]);
+        assert!(crosses_blade([0.5, 0.8, -0.1], [0.5, 0.8, 0.1], a, b, 0.5));
+        assert!(!crosses_blade([0.5, 0.2, -0.1], [0.5, 0.2, 0.1], a, b, 0.5));
+        assert!(!crosses_blade([1.5, 0.8, -0.1], [1.5, 0.8, 0.1], a, b, 0.5));
+    }
+}

@@ -1,0 +1,107 @@
+//! What the tissue looks like: world-space triangle meshes per layer (triangles that span a broken link
+//! left out, so a cut opens as a gap), the connective fibres as segments, refilled in place.
+
+use super::{LinkKind, Tissue};
+use crate::chainmail::LinkId;
+use crate::simulation::LayerMesh;
+
+impl Tissue {
+    /// Refills `out` with one mesh per layer, the upper layer first. Buffers are reused; triangles are
+    /// rebuilt only when the topology changed since the mesh was last filled.
+    pub fn fill_meshes(&self, out: &mut Vec<LayerMesh>) {
+        let nl = self.layers.len();
+        out.truncate(nl);
+        while out.len() < nl {
+            out.push(LayerMesh { topology_version: u64::MAX, ..LayerMesh::default() });
+        }
+        for (slot, layer) in out.iter_mut().zip(self.layers.iter().rev()) {
+            if slot.name != layer.name {
+                slot.name.clone_from(&layer.name);
+            }
+            slot.color = layer.color;
+            let first = layer.first as usize;
+            let n = layer.count as usize;
+            slot.positions.clear();
+            slot.positions
+                .extend(self.body.positions()[first..first + n].iter().map(|&p| self.geometry.to_world(p)));
+            if slot.topology_version != self.topology_version || slot.triangles.is_empty() {
+                slot.triangles.clear();
+                slot.triangles.extend(layer.triangles.iter().filter_map(|&(t, links)| {
+                    links
+                        .iter()
+                        .all(|&l| l == u32::MAX || self.body.link_intact(LinkId(l)))
+                        .then(|| t.map(|v| v - layer.first))
+                }));
+                slot.topology_version = self.topology_version;
+            }
+            slot.normals.clear();
+            slot.normals.resize(n, [0.0; 3]);
+            for t in &slot.triangles {
+                let [a, b, c] = t.map(|v| slot.positions[v as usize]);
+                let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+                let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+                let f = [
+                    e1[1] * e2[2] - e1[2] * e2[1],
+                    e1[2] * e2[0] - e1[0] * e2[2],
+                    e1[0] * e2[1] - e1[1] * e2[0],
+                ];
+                for &v in t {
+                    let m = &mut slot.normals[v as usize];
+                    m[0] += f[0];
+                    m[1] += f[1];
+                    m[2] += f[2];
+                }
+            }
+            for m in &mut slot.normals {
+                let l = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+                *m = if l > 0.0 { [m[0] / l, m[1] / l, m[2] / l] } else { [0.0, 1.0, 0.0] };
+            }
+        }
+    }
+
+    /// Refills `out` with the intact connective fibres as world-space segments.
+    pub fn fill_fibres(&self, out: &mut Vec<[[f32; 3]; 2]>) {
+        out.clear();
+        for (l, kind) in self.link_kind.iter().enumerate() {
+            let id = LinkId(l as u32);
+            if *kind != LinkKind::Connective || !self.body.link_intact(id) {
+                continue;
+            }
+            let Some([a, b]) = self.body.lattice().link_ends(id) else { continue };
+            if let (Some(pa), Some(pb)) = (self.world_position(a), self.world_position(b)) {
+                out.push([pa, pb]);
+            }
+        }
+    }
+
+    /// Connected components of the graph of intact links within one layer (lattice order), for tests
+    /// and reports: a cut straight across a sheet leaves two.
+    pub fn layer_components(&self, layer: usize) -> usize {
+        let Some(l) = self.layers.get(layer) else { return 0 };
+        let (first, n) = (l.first as usize, l.count as usize);
+        let mut seen = vec![false; n];
+        let mut stack = Vec::new();
+        let mut components = 0;
+        for start in 0..n {
+            if seen[start] {
+                continue;
+            }
+            components += 1;
+            seen[start] = true;
+            stack.push(start);
+            while let Some(i) = stack.pop() {
+                for (nb, link) in
+                    self.body.lattice().neighbours(crate::chainmail::ElementId((first + i) as u32))
+                {
+                    let j = nb.index();
+                    if j < first || j >= first + n || !self.body.link_intact(link) || seen[j - first] {
+                        continue;
+                    }
+                    seen[j - first] = true;
+                    stack.push(j - first);
+                }
+            }
+        }
+        components
+    }
+}

@@ -1,0 +1,480 @@
+//! Tissue: one or two SurfaceChainMail layers joined by connective fibres, or a ChainMail volume; how
+//! it is grasped, pushed, cut and torn, and how it keeps its layers apart.
+//!
+//! A layered tissue is a single ChainMail lattice in `(u, v, h)` coordinates (see [`crate::surface`]):
+//! each layer is a `u × v` sheet at its rest offset `h`, and the connective fibres are the links along
+//! `h` between the two sheets, with their own, softer material. A deformation runs in two parts, as in
+//! the paper: first the chain reaction in the `(u, v)` plane ([`Pass::Plane`]), then the pass along the
+//! surface normal ([`Pass::Normal`]), where a neighbour whose normal separation exceeds
+//! `MaxRelShear × Dist` moves along its normal to exactly that separation. The two results combine into
+//! the new 3D shape `X(u, v) + h·N(u, v)`.
+//!
+//! Must not import wgpu, winit or egui. Topology changes (cuts, tears) happen only in
+//! [`Tissue::apply_cuts`] and [`Tissue::apply_tears`], which bump [`Tissue::topology_version`].
+
+mod build;
+mod cut;
+mod mesh;
+
+pub use build::{ConnectiveSpec, LayerSpec, LayeredSpec, Pinning, TissueError, TissueSpec, VolumeSpec};
+pub use cut::{CutDepth, CutSegment};
+
+use serde::{Deserialize, Serialize};
+
+use crate::chainmail::{Body, BreakReason, ElementId, LinkId, MaterialId, Pass, RelaxBudget, Workspace};
+use crate::surface::Surface;
+
+/// How lattice coordinates map to the world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Geometry {
+    /// Layers on a parametric surface: lattice `(u, v, h)`.
+    Surface(Surface),
+    /// A volume: lattice coordinates are world coordinates.
+    Volume,
+}
+
+impl Geometry {
+    /// World position of lattice coordinates.
+    #[inline]
+    pub fn to_world(&self, p: [f32; 3]) -> [f32; 3] {
+        match self {
+            Geometry::Surface(s) => s.to_world(p),
+            Geometry::Volume => p,
+        }
+    }
+
+    /// Lattice coordinates of a world point (`u_hint` chooses the branch of a wrapped `u`).
+    #[inline]
+    pub fn to_lattice(&self, p: [f32; 3], u_hint: f32) -> [f32; 3] {
+        match self {
+            Geometry::Surface(s) => s.to_lattice(p, u_hint),
+            Geometry::Volume => p,
+        }
+    }
+}
+
+/// What a link is part of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum LinkKind {
+    /// A link within layer `n` (lattice order: 0 is the lowest).
+    Layer(u8),
+    /// A connective fibre between the layers.
+    Connective,
+}
+
+/// A layer (or a volume's outer surface) as drawn and picked.
+#[derive(Clone, Debug)]
+pub struct Layer {
+    /// Name from the scene.
+    pub name: String,
+    /// Linear RGBA colour.
+    pub color: [f32; 4],
+    /// First element of the layer; its elements are `first .. first + count`.
+    pub first: u32,
+    /// Number of elements (vertices of its mesh).
+    pub count: u32,
+    /// The layer's material.
+    pub material: MaterialId,
+    /// Candidate triangles (element ids, global) with the two lattice links each spans; a triangle is
+    /// drawn while both links are intact.
+    pub(crate) triangles: Vec<([u32; 3], [u32; 2])>,
+}
+
+/// A topology change, for whoever keeps structures built on the mesh (render buffers, picking).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TopologyEvent {
+    /// The link that broke.
+    pub link: LinkId,
+    /// What it was part of.
+    pub kind: LinkKind,
+    /// Why it broke.
+    pub reason: BreakReason,
+}
+
+/// Running totals of what the tissue went through.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Damage {
+    /// In-layer links cut.
+    pub layer_links_cut: u64,
+    /// Connective links cut.
+    pub connective_links_cut: u64,
+    /// Links torn by over-stretching (either kind).
+    pub links_torn: u64,
+}
+
+/// The result of pulling an element: how far it went in each pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pull {
+    /// Elements moved by the in-plane (or volume) chain reaction.
+    pub moved_plane: u32,
+    /// Elements moved by the normal pass.
+    pub moved_normal: u32,
+    /// World position the element reached.
+    pub achieved: [f32; 3],
+    /// Smallest share of the requested move that the tissue allowed, over both passes.
+    pub fraction: f32,
+}
+
+/// A deformable tissue.
+#[derive(Clone, Debug)]
+pub struct Tissue {
+    pub(crate) body: Body,
+    pub(crate) ws: Workspace,
+    pub(crate) geometry: Geometry,
+    pub(crate) layers: Vec<Layer>,
+    pub(crate) link_kind: Vec<LinkKind>,
+    /// World rest length of each link, metres (for stretch and tearing).
+    pub(crate) rest_len: Vec<f32>,
+    /// Elements per layer sheet (`nu × nv`) for layered tissue; pairs across layers differ by this.
+    pub(crate) sheet: u32,
+    pub(crate) min_gap: f32,
+    /// Elements disturbed since relaxation last converged.
+    pub(crate) active: Vec<ElementId>,
+    pub(crate) in_active: Vec<bool>,
+    pub(crate) cut_queue: Vec<CutSegment>,
+    pub(crate) events: Vec<TopologyEvent>,
+    pub(crate) topology_version: u64,
+    pub(crate) damage: Damage,
+    /// Largest link stretch (world length over rest length) seen at the last check.
+    pub(crate) max_stretch: f32,
+    pub(crate) spacing: f32,
+}
+
+impl Tissue {
+    /// The ChainMail body.
+    pub fn body(&self) -> &Body {
+        &self.body
+    }
+
+    /// Mutable access to the body (materials tuned live, pins changed).
+    pub fn body_mut(&mut self) -> &mut Body {
+        &mut self.body
+    }
+
+    /// How lattice coordinates map to the world.
+    pub fn geometry(&self) -> Geometry {
+        self.geometry
+    }
+
+    /// Layers in lattice order (the lowest first).
+    pub fn layers(&self) -> &[Layer] {
+        &self.layers
+    }
+
+    /// What each link is part of.
+    pub fn link_kind(&self, l: LinkId) -> Option<LinkKind> {
+        self.link_kind.get(l.index()).copied()
+    }
+
+    /// Every connective link.
+    pub fn connective_links(&self) -> impl Iterator<Item = LinkId> + '_ {
+        self.link_kind
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| **k == LinkKind::Connective)
+            .map(|(i, _)| LinkId(i as u32))
+    }
+
+    /// Bumped at every cut or tear.
+    pub fn topology_version(&self) -> u64 {
+        self.topology_version
+    }
+
+    /// Damage so far.
+    pub fn damage(&self) -> Damage {
+        self.damage
+    }
+
+    /// Largest link stretch found by the last [`Tissue::apply_tears`].
+    pub fn max_stretch(&self) -> f32 {
+        self.max_stretch
+    }
+
+    /// Typical element spacing, metres.
+    pub fn spacing(&self) -> f32 {
+        self.spacing
+    }
+
+    /// Smallest normal gap kept between the layers, metres.
+    pub fn min_gap(&self) -> f32 {
+        self.min_gap
+    }
+
+    /// The topology events since the last call (drained).
+    pub fn drain_events(&mut self) -> std::vec::Drain<'_, TopologyEvent> {
+        self.events.drain(..)
+    }
+
+    /// World position of an element.
+    pub fn world_position(&self, e: ElementId) -> Option<[f32; 3]> {
+        self.body.positions().get(e.index()).map(|&p| self.geometry.to_world(p))
+    }
+
+    /// Which layer an element belongs to (lattice order).
+    pub fn layer_of(&self, e: ElementId) -> Option<usize> {
+        self.layers.iter().position(|l| e.0 >= l.first && e.0 < l.first + l.count)
+    }
+
+    /// The element of the other layer paired with `e` (same `u`, `v` column), for two-layer tissue.
+    pub fn partner(&self, e: ElementId) -> Option<ElementId> {
+        if self.layers.len() != 2 || self.sheet == 0 {
+            return None;
+        }
+        match self.layer_of(e)? {
+            0 => Some(ElementId(e.0 + self.sheet)),
+            _ => Some(ElementId(e.0 - self.sheet)),
+        }
+    }
+
+    /// The element nearest to a world point, optionally within one layer (lattice order).
+    pub fn nearest_element(&self, p: [f32; 3], layer: Option<usize>) -> Option<ElementId> {
+        let mut best: Option<(f32, u32)> = None;
+        for (li, l) in self.layers.iter().enumerate() {
+            if layer.is_some_and(|x| x != li) {
+                continue;
+            }
+            for i in l.first..l.first + l.count {
+                let w = self.geometry.to_world(self.body.positions()[i as usize]);
+                let d = (w[0] - p[0]).powi(2) + (w[1] - p[1]).powi(2) + (w[2] - p[2]).powi(2);
+                if best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, i));
+                }
+            }
+        }
+        best.map(|(_, i)| ElementId(i))
+    }
+
+    /// Marks an element as held by an instrument (or lets it go).
+    pub fn set_held(&mut self, e: ElementId, held: bool) {
+        // Out-of-range ids are ignored: the instrument only holds ids this tissue issued.
+        let _ = self.body.set_held(e, held);
+    }
+
+    pub(crate) fn activate(&mut self, e: u32) {
+        let i = e as usize;
+        if i < self.in_active.len() && !self.in_active[i] {
+            self.in_active[i] = true;
+            self.active.push(ElementId(e));
+        }
+    }
+
+    fn activate_moved(&mut self) {
+        let moved = self.ws.moved.len();
+        for k in 0..moved {
+            let e = ElementId(self.ws.moved[k]);
+            self.activate(e.0);
+            let (s0, s1) = {
+                let lat = self.body.lattice();
+                (lat.adj_start[e.index()] as usize, lat.adj_start[e.index() + 1] as usize)
+            };
+            for s in s0..s1 {
+                let n = self.body.lattice().adj_nbr[s];
+                self.activate(n);
+            }
+        }
+    }
+
+    /// Pulls element `e` towards a world point: the chain reaction in the surface plane, then the
+    /// normal pass (a volume runs one 3D chain reaction). Pins cut the move short.
+    pub fn pull(&mut self, e: ElementId, target: [f32; 3]) -> Pull {
+        let mut out = Pull { fraction: 1.0, ..Pull::default() };
+        for &pass in self.passes() {
+            let (moved, fraction) = self.pull_pass(e, target, pass);
+            if pass == Pass::Normal {
+                out.moved_normal = moved;
+            } else {
+                out.moved_plane = moved;
+            }
+            out.fraction = out.fraction.min(fraction);
+        }
+        out.achieved = self.world_position(e).unwrap_or(target);
+        out
+    }
+
+    /// The deformation passes of this tissue, in order: `[Plane, Normal]` on a surface, `[All]` in a
+    /// volume.
+    pub fn passes(&self) -> &'static [Pass] {
+        match self.geometry {
+            Geometry::Surface(_) => &[Pass::Plane, Pass::Normal],
+            Geometry::Volume => &[Pass::All],
+        }
+    }
+
+    /// One deformation pass of [`Tissue::pull`]: returns the elements moved and the share of the move
+    /// the tissue allowed.
+    pub fn pull_pass(&mut self, e: ElementId, target: [f32; 3], pass: Pass) -> (u32, f32) {
+        let Ok(p) = self.body.position(e) else { return (0, 0.0) };
+        let t = self.geometry.to_lattice(target, p[0]);
+        let Ok(d) = self.body.deform(&mut self.ws, e, t, pass) else { return (0, 0.0) };
+        self.activate_moved();
+        (d.moved, d.fraction)
+    }
+
+    /// The probe: a ball of `radius` at world point `tip` pushes the surface of the outermost layer
+    /// (layered) or the top of a volume where it meets it. Returns the elements moved.
+    pub fn push(&mut self, tip: [f32; 3], radius: f32) -> u32 {
+        let top = self.layers.len().saturating_sub(1);
+        let Some(e) = self.nearest_element(tip, Some(top)) else { return 0 };
+        let Ok(p) = self.body.position(e) else { return 0 };
+        let t = self.geometry.to_lattice(tip, p[0]);
+        let (axis, pass) = match self.geometry {
+            Geometry::Surface(_) => (2, Pass::Normal),
+            Geometry::Volume => (1, Pass::All),
+        };
+        // In contact when the element lies inside the ball, measured across the surface.
+        let lateral = match self.geometry {
+            Geometry::Surface(_) => ((t[0] - p[0]).powi(2) + (t[1] - p[1]).powi(2)).sqrt(),
+            Geometry::Volume => ((t[0] - p[0]).powi(2) + (t[2] - p[2]).powi(2)).sqrt(),
+        };
+        if lateral >= radius {
+            return 0;
+        }
+        let depth = (radius * radius - lateral * lateral).sqrt();
+        let limit = t[axis] - depth;
+        if p[axis] <= limit {
+            return 0;
+        }
+        let mut goal = p;
+        goal[axis] = limit;
+        let Ok(d) = self.body.deform(&mut self.ws, e, goal, pass) else { return 0 };
+        self.activate_moved();
+        d.moved
+    }
+
+    /// Relaxes the disturbed region within `budget`; forgets the region once it has converged.
+    pub fn relax(&mut self, budget: RelaxBudget) -> crate::chainmail::RelaxReport {
+        if self.active.is_empty() {
+            return crate::chainmail::RelaxReport { converged: true, ..Default::default() };
+        }
+        let report = self.body.relax_elements(&mut self.ws, budget, &self.active);
+        if report.converged {
+            for e in self.active.drain(..) {
+                self.in_active[e.index()] = false;
+            }
+        }
+        report
+    }
+
+    /// Relaxes the whole body within `budget` (for spare time, and for tests).
+    pub fn relax_all(&mut self, budget: RelaxBudget) -> crate::chainmail::RelaxReport {
+        self.body.relax(&mut self.ws, budget, crate::chainmail::RelaxRegion::All)
+    }
+
+    /// Keeps the layers apart: wherever an element of the upper layer has come closer than the minimum
+    /// gap to its partner below (along the normal), the free one of the two moves away (both halfway
+    /// when both are free). Returns how many pairs were corrected.
+    pub fn enforce_contact(&mut self) -> u32 {
+        if self.layers.len() != 2 || !matches!(self.geometry, Geometry::Surface(_)) {
+            return 0;
+        }
+        let mut fixed = 0;
+        let count = self.active.len();
+        for k in 0..count {
+            let e = self.active[k];
+            let Some(lower) = (if e.0 >= self.sheet { Some(ElementId(e.0 - self.sheet)) } else { None })
+            else {
+                continue;
+            };
+            let upper = ElementId(lower.0 + self.sheet);
+            let (Ok(pl), Ok(pu)) = (self.body.position(lower), self.body.position(upper)) else { continue };
+            let gap = pu[2] - pl[2];
+            if gap >= self.min_gap {
+                continue;
+            }
+            let short = self.min_gap - gap;
+            let free_l = !(self.body.is_pinned(lower) || self.body.is_held(lower));
+            let free_u = !(self.body.is_pinned(upper) || self.body.is_held(upper));
+            let (dl, du) = match (free_l, free_u) {
+                (true, true) => (-0.5 * short, 0.5 * short),
+                (true, false) => (-short, 0.0),
+                (false, true) => (0.0, short),
+                (false, false) => continue,
+            };
+            let _ = self.body.set_position(lower, [pl[0], pl[1], pl[2] + dl]);
+            let _ = self.body.set_position(upper, [pu[0], pu[1], pu[2] + du]);
+            self.activate(lower.0);
+            fixed += 1;
+        }
+        fixed
+    }
+
+    /// Breaks every link near the disturbed region stretched past its material's tear ratio (world
+    /// length over rest length), counting them as torn. Also records the largest stretch seen.
+    pub fn apply_tears(&mut self) -> u32 {
+        let mut torn = 0;
+        let mut max_stretch = 0.0f32;
+        let count = self.active.len();
+        for k in 0..count {
+            let e = self.active[k].index();
+            let (s0, s1) = {
+                let lat = self.body.lattice();
+                (lat.adj_start[e] as usize, lat.adj_start[e + 1] as usize)
+            };
+            for s in s0..s1 {
+                let raw = self.body.lattice().adj_link[s];
+                if raw & crate::chainmail::SIDE_B_BIT != 0 {
+                    continue; // each link is checked from its `a` end only
+                }
+                let l = LinkId(raw);
+                if !self.body.link_intact(l) {
+                    continue;
+                }
+                let stretch = self.world_stretch(l);
+                max_stretch = max_stretch.max(stretch);
+                let Some(m) = self.body.link_material(l).and_then(|m| self.body.material(m)) else {
+                    continue;
+                };
+                if let Some(ratio) = m.tear_ratio
+                    && stretch > ratio
+                    && self.break_link(l, BreakReason::Tear)
+                {
+                    torn += 1;
+                }
+            }
+        }
+        self.max_stretch = max_stretch;
+        torn
+    }
+
+    /// World length of a link over its world rest length.
+    pub fn world_stretch(&self, l: LinkId) -> f32 {
+        let Some([a, b]) = self.body.lattice().link_ends(l) else { return 0.0 };
+        let (Some(pa), Some(pb)) = (self.world_position(a), self.world_position(b)) else { return 0.0 };
+        let d = ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2) + (pb[2] - pa[2]).powi(2)).sqrt();
+        d / self.rest_len[l.index()].max(f32::MIN_POSITIVE)
+    }
+
+    /// Largest world stretch over every intact link of the given kind (or all), for reports.
+    pub fn max_world_stretch(&self, kind: Option<LinkKind>) -> f32 {
+        (0..self.body.link_count())
+            .map(|i| LinkId(i as u32))
+            .filter(|&l| self.body.link_intact(l) && kind.is_none_or(|k| self.link_kind[l.index()] == k))
+            .map(|l| self.world_stretch(l))
+            .fold(0.0, f32::max)
+    }
+
+    /// Breaks one link, records the event and the damage. Returns `true` if it was intact.
+    pub(crate) fn break_link(&mut self, l: LinkId, reason: BreakReason) -> bool {
+        if !matches!(self.body.break_link(l, reason), Ok(true)) {
+            return false;
+        }
+        let kind = self.link_kind[l.index()];
+        match (reason, kind) {
+            (BreakReason::Tear, _) => self.damage.links_torn += 1,
+            (BreakReason::Cut, LinkKind::Connective) => self.damage.connective_links_cut += 1,
+            (BreakReason::Cut, LinkKind::Layer(_)) => self.damage.layer_links_cut += 1,
+        }
+        self.events.push(TopologyEvent { link: l, kind, reason });
+        self.topology_version += 1;
+        if let Some([a, b]) = self.body.lattice().link_ends(l) {
+            self.activate(a.0);
+            self.activate(b.0);
+        }
+        true
+    }
+
+    /// Elements in the disturbed region.
+    pub fn active_count(&self) -> usize {
+        self.active.len()
+    }
+}
