@@ -3,14 +3,17 @@
 //!
 //! Each sweep is a damped Jacobi update of the displacement field `u = p - rest`: every free element
 //! goes a fraction [`OMEGA`] of the way to the stiffness-weighted mean displacement of its intact
-//! neighbours. For a graph Laplacian this never raises the energy when `OMEGA <= 1`; below 1 it also
-//! cannot stall in the checkerboard mode of a bipartite grid.
+//! neighbours, but no further than the ChainMail limits of its links allow (Gibson: relaxation adjusts
+//! positions *within* the constraints, so a taut fibre stays taut). For a graph Laplacian a Jacobi step
+//! scaled per coordinate by factors in `[0, 1]` never raises the energy when `OMEGA <= 1`; below 1 it
+//! also cannot stall in the checkerboard mode of a bipartite grid.
 
 use std::time::{Duration, Instant};
 
 use super::body::{Body, FIXED};
 use super::deform::Workspace;
 use super::ids::ElementId;
+use super::lattice::SIDE_B;
 
 /// Jacobi damping factor.
 pub const OMEGA: f32 = 0.9;
@@ -81,20 +84,39 @@ impl Body {
         report
     }
 
-    /// The relaxed position of element `i` (assumed free).
+    /// The relaxed position of element `i` (assumed free): a damped Jacobi step toward the weighted mean
+    /// displacement of its neighbours, shortened per coordinate where it would leave the constraint boxes
+    /// of its intact links (the box of each link taken at the neighbour's current position). A step is
+    /// only ever shortened, never reversed, so the energy still cannot rise (each coordinate's step is
+    /// the Jacobi step scaled by a factor in `[0, 1]`, and `ω ≤ 1`).
     #[inline(always)]
     fn relaxed(&self, i: usize) -> [f32; 3] {
         let lat = &self.lattice;
         let (s0, s1) = (lat.adj_start[i] as usize, lat.adj_start[i + 1] as usize);
         let mut acc = [0.0f32; 3];
         let mut wsum = 0.0f32;
+        let mut lo = [f32::NEG_INFINITY; 3];
+        let mut hi = [f32::INFINITY; 3];
         for k in s0..s1 {
-            let j = lat.adj_nbr[k] as usize;
             let w = self.adj_w[k];
+            if w == 0.0 {
+                continue;
+            }
+            let j = lat.adj_nbr[k] as usize;
+            let link = lat.adj_link[k];
             let (p, r) = (self.pos[j], lat.rest[j]);
-            acc[0] += w * (p[0] - r[0]);
-            acc[1] += w * (p[1] - r[1]);
-            acc[2] += w * (p[2] - r[2]);
+            let [blo, bhi] = self.link_box[(link & !SIDE_B) as usize];
+            for c in 0..3 {
+                acc[c] += w * (p[c] - r[c]);
+                // `i` is the link's `b` end when the entry sits in `b`'s list.
+                let (l, h) = if link & SIDE_B != 0 {
+                    (p[c] + blo[c], p[c] + bhi[c])
+                } else {
+                    (p[c] - bhi[c], p[c] - blo[c])
+                };
+                lo[c] = lo[c].max(l);
+                hi[c] = hi[c].min(h);
+            }
             wsum += w;
         }
         let p = self.pos[i];
@@ -103,11 +125,13 @@ impl Body {
         }
         let r = lat.rest[i];
         let inv = OMEGA / wsum;
-        [
-            p[0] + (acc[0] * inv - OMEGA * (p[0] - r[0])),
-            p[1] + (acc[1] * inv - OMEGA * (p[1] - r[1])),
-            p[2] + (acc[2] * inv - OMEGA * (p[2] - r[2])),
-        ]
+        let mut q = p;
+        for c in 0..3 {
+            let target = p[c] + (acc[c] * inv - OMEGA * (p[c] - r[c]));
+            // Never leave the boxes further than the element already is; never step backwards.
+            q[c] = target.max(lo[c].min(p[c])).min(hi[c].max(p[c]));
+        }
+        q
     }
 
     fn sweep_all(&mut self, ws: &mut Workspace) -> f32 {

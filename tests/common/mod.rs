@@ -1,0 +1,47 @@
+//! Shared set-up for the tissue tests.
+#![allow(dead_code)]
+
+use dissect::chainmail::Material;
+use dissect::surface::Surface;
+use dissect::tissue::{ConnectiveSpec, LayerSpec, LayeredSpec, Pinning, Tissue, TissueSpec};
+
+pub const WIDTH: f32 = 0.06;
+pub const GAP: f32 = 0.003;
+
+pub fn two_layers(n: usize, surface: Surface, pinned: Pinning) -> LayeredSpec {
+    LayeredSpec {
+        surface,
+        resolution: [n, n],
+        u_coords: None,
+        v_coords: None,
+        layers: vec![
+            LayerSpec {
+                name: "dura".into(),
+                color: [0.86, 0.72, 0.55, 1.0],
+                offset: GAP,
+                material: Material { tear_ratio: Some(3.0), ..Material::relative(1.15, 0.85, 0.3) },
+            },
+            LayerSpec {
+                name: "arachnoid".into(),
+                color: [0.85, 0.45, 0.45, 1.0],
+                offset: 0.0,
+                material: Material { tear_ratio: Some(3.0), ..Material::relative(1.15, 0.85, 0.3) },
+            },
+        ],
+        connective: Some(ConnectiveSpec {
+            material: Material { stiffness: 0.3, tear_ratio: None, ..Material::relative(2.0, 0.5, 0.5) },
+            density: 1.0,
+            min_gap: 0.0005,
+        }),
+        pinned,
+    }
+}
+
+pub fn plane(n: usize) -> Tissue {
+    Tissue::build(&TissueSpec::Layered(two_layers(
+        n,
+        Surface::Plane { width: WIDTH, depth: WIDTH },
+        Pinning::Boundary,
+    )))
+    .expect("tissue")
+}

@@ -1,0 +1,152 @@
+//! Two layers joined by connective fibres: lifting the upper layer drags the lower one while the fibres
+//! hold, cutting the fibres of a region lets the layers part there and nowhere else, a pushed layer never
+//! passes through the other, and cuts split a sheet.
+
+mod common;
+
+use common::{GAP, WIDTH, plane};
+use dissect::chainmail::{ElementId, RelaxBudget};
+use dissect::instrument::Command;
+use dissect::simulation::{InstrumentKind, World, WorldConfig};
+use dissect::tissue::{CutDepth, CutSegment, LinkKind, Tissue};
+
+const N: usize = 25;
+
+fn centre(t: &Tissue, layer: usize) -> ElementId {
+    let l = &t.layers()[layer];
+    ElementId(l.first + (N / 2 + N * (N / 2)) as u32)
+}
+
+fn lift(world: &mut World, by: f32, steps: usize) {
+    let e = world.instrument().grasped.expect("grasped");
+    let start = world.tissue().world_position(e).expect("start");
+    for s in 1..=steps {
+        let f = s as f32 / steps as f32;
+        world.push(Command::MoveTo([start[0], start[1] + f * by, start[2]]));
+        world.step();
+    }
+}
+
+fn world_with_grasp(tissue: Tissue, at: [f32; 3]) -> World {
+    let mut world =
+        World::new(tissue, WorldConfig { relax: RelaxBudget::sweeps(2), ..WorldConfig::default() });
+    world.push(Command::Select(InstrumentKind::Forceps));
+    world.push(Command::MoveTo(at));
+    world.push(Command::Grasp);
+    world.step();
+    assert!(world.instrument().grasped.is_some(), "nothing to grasp at {at:?}");
+    world
+}
+
+fn height(t: &Tissue, e: ElementId) -> f32 {
+    t.world_position(e).expect("element")[1]
+}
+
+#[test]
+fn lifting_the_upper_layer_drags_the_lower_one() {
+    let tissue = plane(N);
+    let lower = centre(&tissue, 0);
+    let mut world = world_with_grasp(tissue, [0.0, GAP, 0.0]);
+    lift(&mut world, 0.015, 100);
+    let t = world.tissue();
+    let upper = centre(t, 1);
+    assert!(height(t, upper) > 0.012, "upper lifted to {}", height(t, upper));
+    assert!(height(t, lower) > 0.005, "lower followed only to {}", height(t, lower));
+    assert!(height(t, upper) - height(t, lower) >= t.min_gap());
+}
+
+#[test]
+fn cut_fibres_let_the_layers_part_there_and_not_elsewhere() {
+    let mut tissue = plane(N);
+    // Cut the fibres of a square patch around the centre, between the layers.
+    let r = 0.2 * WIDTH;
+    for k in 0..=20 {
+        let z = -r + 2.0 * r * k as f32 / 20.0;
+        tissue.queue_cut(CutSegment { from: [-r, 0.0015, z], to: [r, 0.0015, z], depth: CutDepth::Between });
+    }
+    let cut = tissue.apply_cuts();
+    assert!(cut > 0);
+    assert_eq!(tissue.damage().layer_links_cut, 0, "a cut between the layers cut a layer");
+    let lower = centre(&tissue, 0);
+    let far_lower = ElementId(tissue.layers()[0].first + (N / 2 + N * 3) as u32);
+    let far_upper = ElementId(far_lower.0 + (N * N) as u32);
+    let mut world = world_with_grasp(tissue, [0.0, GAP, 0.0]);
+    lift(&mut world, 0.015, 100);
+    let t = world.tissue();
+    let upper = centre(t, 1);
+    assert!(height(t, upper) > 0.012);
+    assert!(
+        height(t, lower) < 0.002,
+        "lower layer followed to {} where the fibres were cut",
+        height(t, lower)
+    );
+    // Away from the patch the fibres still hold the layers together.
+    let sep_far = height(t, far_upper) - height(t, far_lower);
+    assert!(sep_far <= 2.0 * GAP + 1e-4, "layers parted far from the cut: {sep_far}");
+}
+
+#[test]
+fn pushed_layer_does_not_pass_through_the_other() {
+    let tissue = plane(N);
+    let mut world = World::new(tissue, WorldConfig::default());
+    world.push(Command::Select(InstrumentKind::Probe));
+    for s in 0..=200 {
+        let y = 0.02 - 0.03 * s as f32 / 200.0;
+        world.push(Command::MoveTo([0.0, y, 0.0]));
+        world.step();
+        let t = world.tissue();
+        let sheet = (N * N) as u32;
+        for i in 0..sheet {
+            let (l, u) = (ElementId(i), ElementId(i + sheet));
+            let (hl, hu) = (t.body().position(l).expect("l")[2], t.body().position(u).expect("u")[2]);
+            assert!(
+                hu - hl >= t.min_gap() - 1e-6,
+                "step {s}: layers {hu} and {hl} closer than the minimum gap"
+            );
+        }
+    }
+    let t = world.tissue();
+    assert!(height(t, centre(t, 1)) < -0.001, "the probe did not push the tissue down");
+}
+
+#[test]
+fn a_cut_straight_across_a_sheet_leaves_two_components() {
+    let mut tissue = plane(N);
+    assert_eq!(tissue.layer_components(1), 1);
+    tissue.queue_cut(CutSegment {
+        from: [-0.04, GAP, 0.0013],
+        to: [0.04, GAP, 0.0013],
+        depth: CutDepth::Upper,
+    });
+    let cut = tissue.apply_cuts();
+    assert_eq!(cut as usize, N, "one link per column");
+    assert_eq!(tissue.layer_components(1), 2);
+    assert_eq!(tissue.layer_components(0), 1, "the lower layer was not touched");
+    assert_eq!(tissue.damage().layer_links_cut, N as u64);
+    let events: Vec<_> = tissue.drain_events().collect();
+    assert_eq!(events.len(), N);
+    assert!(events.iter().all(|e| e.kind == LinkKind::Layer(1)));
+    // The render mesh leaves out the triangles that spanned the cut.
+    let mut meshes = Vec::new();
+    tissue.fill_meshes(&mut meshes);
+    let full = 2 * (N - 1) * (N - 1);
+    assert_eq!(meshes[0].triangles.len(), full - 2 * (N - 1));
+    assert_eq!(meshes[1].triangles.len(), full);
+}
+
+#[test]
+fn over_stretching_tears_and_is_counted_apart_from_cuts() {
+    use dissect::chainmail::Material;
+    let mut spec = common::two_layers(
+        15,
+        dissect::surface::Surface::Plane { width: WIDTH, depth: WIDTH },
+        dissect::tissue::Pinning::Boundary,
+    );
+    spec.layers[0].material = Material { tear_ratio: Some(1.1), ..Material::relative(1.6, 0.8, 0.6) };
+    let tissue = Tissue::build(&dissect::tissue::TissueSpec::Layered(spec)).expect("tissue");
+    let mut world = world_with_grasp(tissue, [0.0, GAP, 0.0]);
+    lift(&mut world, 0.03, 100);
+    let d = world.tissue().damage();
+    assert!(d.links_torn > 0, "nothing tore");
+    assert_eq!(d.layer_links_cut + d.connective_links_cut, 0);
+}
