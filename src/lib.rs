@@ -26,3 +26,4 @@ pub mod instrument;
 pub mod simulation;
 pub mod surface;
 pub mod tissue;
+pub mod training;

@@ -432,7 +432,9 @@ impl Tissue {
                 }
             }
         }
-        self.max_stretch = max_stretch;
+        if count > 0 {
+            self.max_stretch = max_stretch;
+        }
         torn
     }
 
