@@ -23,6 +23,7 @@
 
 pub mod chainmail;
 pub mod instrument;
+pub mod runner;
 pub mod simulation;
 pub mod surface;
 pub mod tissue;

@@ -244,6 +244,27 @@ impl Tissue {
         best.map(|(_, i)| ElementId(i))
     }
 
+    /// The world point at fractions `(uf, vf)` of the surface's `u` and `v` extent and `h` metres along
+    /// the normal from the base surface (for a volume: over its top face, `h` above it).
+    pub fn surface_point(&self, uf: f32, vf: f32, h: f32) -> [f32; 3] {
+        let rest = self.body.lattice().rest_positions();
+        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+        for p in rest {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        match self.geometry {
+            Geometry::Surface(s) => {
+                // A wrapped u spans the whole period, not just the first to the last column.
+                let u_span = s.u_period().unwrap_or(hi[0] - lo[0]);
+                s.to_world([lo[0] + uf * u_span, lo[1] + vf * (hi[1] - lo[1]), h])
+            }
+            Geometry::Volume => [lo[0] + uf * (hi[0] - lo[0]), hi[1] + h, lo[2] + vf * (hi[2] - lo[2])],
+        }
+    }
+
     /// Marks an element as held by an instrument (or lets it go).
     pub fn set_held(&mut self, e: ElementId, held: bool) {
         // Out-of-range ids are ignored: the instrument only holds ids this tissue issued.

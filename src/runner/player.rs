@@ -1,0 +1,223 @@
+//! The script player: timed actions in, one batch of instrument commands per step out.
+
+use serde::{Deserialize, Serialize};
+
+use crate::instrument::Command;
+use crate::simulation::{InstrumentKind, World};
+use crate::tissue::CutDepth;
+
+/// A point named in a script.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+pub enum Point {
+    /// World coordinates, metres.
+    World(f32, f32, f32),
+    /// Fractions of the surface's `u` and `v` extent, and metres along the normal from the base surface.
+    Surface(f32, f32, f32),
+}
+
+impl Point {
+    /// The world position of the point in `world`'s tissue.
+    pub fn resolve(&self, world: &World) -> [f32; 3] {
+        match *self {
+            Point::World(x, y, z) => [x, y, z],
+            Point::Surface(u, v, h) => world.tissue().surface_point(u, v, h),
+        }
+    }
+}
+
+/// One timed action of a script.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+pub enum Action {
+    /// Take an instrument.
+    Select(InstrumentKind),
+    /// Forceps: go to a point and close on the nearest element within reach.
+    Grasp(Point),
+    /// Forceps: close on an element (recordings of picking).
+    GraspElement(u32),
+    /// Move the instrument in a straight line over `steps` steps.
+    MoveTo {
+        /// Destination.
+        to: Point,
+        /// Steps the motion takes, at least 1.
+        steps: u32,
+    },
+    /// Forceps: open.
+    Release,
+    /// Scalpel: cut along a path at a depth over `steps` steps.
+    Cut {
+        /// The blade's path.
+        path: Vec<Point>,
+        /// How deep.
+        depth: CutDepth,
+        /// Steps the stroke takes.
+        steps: u32,
+    },
+    /// Probe: from `at`, push towards `to` over `steps` steps.
+    Push {
+        /// Start of the push.
+        at: Point,
+        /// End of the push.
+        to: Point,
+        /// Steps it takes.
+        steps: u32,
+    },
+    /// Do nothing for this many steps.
+    Wait(u32),
+    /// Wait until this absolute step.
+    At(u64),
+    /// A raw instrument command, applied at once (recordings).
+    Command(Command),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+struct Motion {
+    path: Vec<[f32; 3]>,
+    /// Cumulative length at each path point.
+    lengths: Vec<f32>,
+    steps: u32,
+    done: u32,
+    end_cut: bool,
+}
+
+impl Motion {
+    fn new(path: Vec<[f32; 3]>, steps: u32, end_cut: bool) -> Self {
+        let mut lengths = vec![0.0];
+        for w in path.windows(2) {
+            let d = ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2) + (w[1][2] - w[0][2]).powi(2))
+                .sqrt();
+            lengths.push(lengths.last().copied().unwrap_or(0.0) + d);
+        }
+        Self { path, lengths, steps: steps.max(1), done: 0, end_cut }
+    }
+
+    fn at(&self, f: f32) -> [f32; 3] {
+        let total = self.lengths.last().copied().unwrap_or(0.0);
+        let s = f * total;
+        for k in 1..self.path.len() {
+            if s <= self.lengths[k] || k + 1 == self.path.len() {
+                let seg = (self.lengths[k] - self.lengths[k - 1]).max(f32::MIN_POSITIVE);
+                let t = ((s - self.lengths[k - 1]) / seg).clamp(0.0, 1.0);
+                let (a, b) = (self.path[k - 1], self.path[k]);
+                return [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])];
+            }
+        }
+        self.path.first().copied().unwrap_or([0.0; 3])
+    }
+}
+
+/// Plays a script into a world, one step at a time.
+#[derive(Clone, Debug)]
+pub struct Player {
+    actions: Vec<Action>,
+    next: usize,
+    motion: Option<Motion>,
+    wait_until: Option<u64>,
+    /// The instrument and tip as this player last commanded them (commands queued this step are not
+    /// applied yet, so the world cannot tell).
+    kind: Option<InstrumentKind>,
+    tip: Option<[f32; 3]>,
+}
+
+impl Player {
+    /// A player at the start of `actions`.
+    pub fn new(actions: Vec<Action>) -> Self {
+        Self { actions, next: 0, motion: None, wait_until: None, kind: None, tip: None }
+    }
+
+    /// Whether every action has been played.
+    pub fn finished(&self) -> bool {
+        self.next >= self.actions.len() && self.motion.is_none() && self.wait_until.is_none()
+    }
+
+    /// Queues this step's commands into `world` (call before [`World::step`]).
+    pub fn feed(&mut self, world: &mut World) {
+        loop {
+            let step = world.step_count();
+            if let Some(until) = self.wait_until {
+                if step < until {
+                    return;
+                }
+                self.wait_until = None;
+            }
+            if let Some(m) = &mut self.motion {
+                m.done += 1;
+                let p = m.at(m.done as f32 / m.steps as f32);
+                world.push(Command::MoveTo(p));
+                self.tip = Some(p);
+                if m.done >= m.steps {
+                    if m.end_cut {
+                        world.push(Command::EndCut);
+                    }
+                    self.motion = None;
+                }
+                return;
+            }
+            let Some(action) = self.actions.get(self.next).cloned() else { return };
+            self.next += 1;
+            self.start(action, world);
+        }
+    }
+
+    fn ensure(&mut self, world: &mut World, kind: InstrumentKind) {
+        if self.kind.unwrap_or(world.instrument().kind) != kind {
+            self.select(world, kind);
+        }
+    }
+
+    fn select(&mut self, world: &mut World, kind: InstrumentKind) {
+        world.push(Command::Select(kind));
+        self.kind = Some(kind);
+    }
+
+    fn move_to(&mut self, world: &mut World, p: [f32; 3]) {
+        world.push(Command::MoveTo(p));
+        self.tip = Some(p);
+    }
+
+    fn start(&mut self, action: Action, world: &mut World) {
+        let step = world.step_count();
+        match action {
+            Action::Select(k) => self.select(world, k),
+            Action::Grasp(p) => {
+                self.ensure(world, InstrumentKind::Forceps);
+                let p = p.resolve(world);
+                self.move_to(world, p);
+                world.push(Command::Grasp);
+            }
+            Action::GraspElement(e) => {
+                self.ensure(world, InstrumentKind::Forceps);
+                world.push(Command::GraspElement(crate::chainmail::ElementId(e)));
+            }
+            Action::MoveTo { to, steps } => {
+                let from = self.tip.unwrap_or(world.instrument().target);
+                self.motion = Some(Motion::new(vec![from, to.resolve(world)], steps, false));
+            }
+            Action::Release => world.push(Command::Release),
+            Action::Cut { path, depth, steps } => {
+                let pts: Vec<[f32; 3]> = path.iter().map(|p| p.resolve(world)).collect();
+                let Some(&first) = pts.first() else { return };
+                self.ensure(world, InstrumentKind::Scalpel);
+                world.push(Command::SetDepth(depth));
+                self.move_to(world, first);
+                world.push(Command::BeginCut);
+                self.motion = Some(Motion::new(pts, steps, true));
+            }
+            Action::Push { at, to, steps } => {
+                self.ensure(world, InstrumentKind::Probe);
+                let a = at.resolve(world);
+                self.move_to(world, a);
+                self.motion = Some(Motion::new(vec![a, to.resolve(world)], steps, false));
+            }
+            Action::Wait(n) => self.wait_until = Some(step + n as u64),
+            Action::At(n) => self.wait_until = Some(n),
+            Action::Command(c) => {
+                match &c {
+                    Command::Select(k) => self.kind = Some(*k),
+                    Command::MoveTo(p) => self.tip = Some(*p),
+                    _ => {}
+                }
+                world.push(c)
+            }
+        }
+    }
+}
