@@ -15,9 +15,11 @@
 //! |---|---|---|
 //! | [`chainmail`] | lattices, materials, the chain reaction, relaxation, broken links | std, serde, thiserror |
 //! | [`simulation`] | the world, the fixed-step clock, the snapshot the renderer reads | chainmail and the modules below it |
+//! | [`scene`] | RON scenes and scripts: schema, loading, validation, errors at `path:line:column` | chainmail, simulation (types only), serde, ron, thiserror |
 //!
 //! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
 //! `training`, `fem`) never imports wgpu, winit or egui.
 
 pub mod chainmail;
+pub mod scene;
 pub mod simulation;
