@@ -43,7 +43,9 @@ pub enum CutDepth {
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub enum Action {
-    /// Take up an instrument (releasing anything held). No time.
+    /// Take up an instrument. No time. Tissue the forceps hold stays clamped where it is while another
+    /// instrument is in use (the paper's two-handed teasing apart); selecting the forceps again takes
+    /// it back, and only `Release` lets it go.
     Select(InstrumentKind),
     /// Forceps: move to the point at once and close the jaws on the nearest element. No time.
     Grasp(Point),
@@ -166,6 +168,36 @@ impl Script {
             }
         }
         out
+    }
+
+    /// Checks that the script fits a scene: every instrument it selects is offered by the scene, and
+    /// cuts at `Between` or `Lower` have two layers to cut. The message names the action (from 1).
+    pub fn check_against(&self, scene: &super::Scene) -> Result<(), String> {
+        let layers = match &scene.tissue {
+            super::Tissue::Layers(l) => l.layers.len(),
+            super::Tissue::Volume(_) => 1,
+        };
+        for (i, a) in self.0.iter().enumerate() {
+            match a {
+                Action::Select(k) if !scene.instruments.contains(k) => {
+                    return Err(format!(
+                        "action {} selects the {k:?}, which the scene \"{}\" does not offer (it offers {:?})",
+                        i + 1,
+                        scene.title,
+                        scene.instruments
+                    ));
+                }
+                Action::Cut { depth: d @ (CutDepth::Between | CutDepth::Lower), .. } if layers < 2 => {
+                    return Err(format!(
+                        "action {} cuts at depth {d:?}, but the scene \"{}\" has one layer; expected `Upper`",
+                        i + 1,
+                        scene.title
+                    ));
+                }
+                _ => {}
+            }
+        }
+        Ok(())
     }
 
     fn check(&self) -> Result<(), Problem> {

@@ -7,11 +7,15 @@
 //! - `Plane` / `Box`: the plane `y = 0`, centred on the origin; `u` runs along x over `width`
 //!   (`x = (u − ½)·width`), `v` along z over `depth` (`z = (v − ½)·depth`); `N = +y`. A `Box` also has a
 //!   rigid block under the layers filling `y ∈ [−height, 0]`.
-//! - `Cylinder`: axis along x, centred on the origin; `u` goes once around (wraps; angle `2πu` from +y
-//!   towards +z), `v` along the axis (`x = (v − ½)·length`); `N` points away from the axis.
-//! - `Sphere`: centred on the origin; `u` is the longitude (wraps; angle `2πu`), `v` runs from the
-//!   south pole (`v = 0`, `y = −radius`) to the north pole (`v = 1`); `N` points outward.
-//! - `Volume`: a block of `size` whose base face lies on `y = 0`, centred in x and z.
+//! - `Cylinder`: axis along x, centred on the origin; `v` runs along the axis (`x = (v − ½)·length`),
+//!   `u` goes once around it (wraps): `y = −r·cos 2πu`, `z = r·sin 2πu`, so `u = 0` is underneath
+//!   (the seam), `u = 0.25` faces the camera (+z) and `u = 0.5` is on top; `N` points away from the axis.
+//! - `Sphere`: centred on the origin; `v` runs from the south pole to the north pole
+//!   (`y = −r·cos πv`, ring radius `ρ = r·sin πv`), `u` is the longitude (wraps):
+//!   `x = −ρ·sin 2πu`, `z = −ρ·cos 2πu`, so the seam is at the back and `u = 0.5` faces +z. By default
+//!   no element sits on a pole (see [`LayerTissue::v_fractions`]). `N` points outward.
+//! - `Volume`: a block of `size` whose base face lies on `y = 0`, centred in x and z. Script points
+//!   `Surface(u, v, h)` lie on its top face: `x = (u − ½)·size.x`, `z = (v − ½)·size.z`, `y = size.y + h`.
 
 use serde::{Deserialize, Serialize};
 
@@ -69,7 +73,8 @@ pub struct LayerTissue {
     /// `i/n` on a wrapped axis).
     #[serde(default)]
     pub u_coords: Option<Vec<f32>>,
-    /// Explicit element positions along `v`, as for `u_coords`. Default: `None`, evenly spaced.
+    /// Explicit element positions along `v`, as for `u_coords`. Default: `None`, evenly spaced (on a
+    /// sphere: cell centres, no element on a pole).
     #[serde(default)]
     pub v_coords: Option<Vec<f32>>,
     /// The layers, upper (outer) first: one or two.
@@ -445,8 +450,15 @@ impl LayerTissue {
         fractions(self.u_coords.as_deref(), self.resolution[0], self.surface.wraps_u())
     }
 
-    /// Element positions along `v` as fractions: `v_coords`, or evenly spaced from 0 to 1.
+    /// Element positions along `v` as fractions: `v_coords`, or evenly spaced from 0 to 1 — except on
+    /// a sphere, where they are cell centres `(j + ½)/n` so that no ring collapses onto a pole.
     pub fn v_fractions(&self) -> Vec<f32> {
+        if self.v_coords.is_none()
+            && let Surface::Sphere { .. } = self.surface
+        {
+            let n = self.resolution[1].max(1);
+            return (0..n).map(|j| (j as f32 + 0.5) / n as f32).collect();
+        }
         fractions(self.v_coords.as_deref(), self.resolution[1], false)
     }
 
