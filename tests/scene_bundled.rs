@@ -70,3 +70,19 @@ fn a_short_scene_gets_its_defaults() {
     assert_eq!(l.u_fractions().len(), 48);
     assert_eq!(l.u_fractions()[47], 1.0);
 }
+
+/// The RON blocks of `scenes/README.md`, in order.
+fn readme_blocks() -> Vec<String> {
+    let text = std::fs::read_to_string(scenes_dir().join("README.md")).expect("read README");
+    text.split("```ron\n").skip(1).filter_map(|b| b.split("```").next()).map(str::to_owned).collect()
+}
+
+#[test]
+fn readme_examples_load() {
+    let blocks = readme_blocks();
+    assert_eq!(blocks.len(), 2, "the minimal scene and the script example");
+    Scene::from_str(&blocks[0], "README.md").unwrap_or_else(|e| panic!("{e}"));
+    let script = Script::from_str(&blocks[1], "README.md").unwrap_or_else(|e| panic!("{e}"));
+    let meninges = Scene::default_scene().unwrap_or_else(|e| panic!("{e}"));
+    script.check_against(&meninges).unwrap_or_else(|e| panic!("{e}"));
+}
