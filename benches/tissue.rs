@@ -77,7 +77,7 @@ fn dissect_benches(c: &mut Criterion) {
     group.bench_function("step/two_layers_256", |b| {
         b.iter(|| {
             k += 1;
-            let dx = if k % 2 == 0 { 3.0 * H } else { -3.0 * H };
+            let dx = if k.is_multiple_of(2) { 3.0 * H } else { -3.0 * H };
             world.push(Command::MoveTo([start[0] + dx, start[1] + 0.002, start[2]]));
             world.step()
         })

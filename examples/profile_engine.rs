@@ -13,6 +13,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t = std::time::Instant::now();
     body.relax(&mut ws, RelaxBudget::sweeps(1), RelaxRegion::All);
     let t2 = t.elapsed();
-    println!("moved {} in {:?} ({:.2} ns/elem); one sweep {:?} ({:.2} ns/elem)", d.moved, t1, t1.as_nanos() as f64 / d.moved as f64, t2, t2.as_nanos() as f64 / (n * n) as f64);
+    println!(
+        "moved {} in {:?} ({:.2} ns/elem); one sweep {:?} ({:.2} ns/elem)",
+        d.moved,
+        t1,
+        t1.as_nanos() as f64 / d.moved as f64,
+        t2,
+        t2.as_nanos() as f64 / (n * n) as f64
+    );
     Ok(())
 }

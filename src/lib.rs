@@ -17,13 +17,17 @@
 //! | [`surface`] | parametric surfaces X(u, v) and the (u, v, h) mapping | chainmail |
 //! | [`tissue`] | layers, connective fibres, pins, grasp and push, contact, cuts, tears, meshes | chainmail, surface |
 //! | [`simulation`] | the world, the fixed-step clock, the snapshot the renderer reads | chainmail and the modules below it |
+//! | [`scene`] | RON scenes and scripts: schema, loading, validation, errors at `path:line:column`; builds a world | chainmail, surface, tissue, simulation, serde, ron |
+//! | [`instrument`] | probe, forceps, scalpel: commands, pose, picking with parry3d | chainmail, tissue, simulation (types) |
+//! | [`runner`] | the script player, run metrics and final state (headless runs) | scene, simulation, training |
+//! | [`training`] | exercise goals, live assessment and score, session report and plot | tissue, simulation |
 //!
 //! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
 //! `training`, `fem`) never imports wgpu, winit or egui.
-
 pub mod chainmail;
 pub mod instrument;
 pub mod runner;
+pub mod scene;
 pub mod simulation;
 pub mod surface;
 pub mod tissue;

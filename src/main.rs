@@ -1,4 +1,174 @@
-//! The `dissect` command line.
-fn main() {
-    println!("dissect: the trainer is being built; run `cargo test` to check the engine.");
+//! The `dissect` command line: open the trainer, check scenes, run a script headless, replay a
+//! recording, compare runs. The only place that uses `anyhow`.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use dissect::runner;
+use dissect::scene::{Scene, Script};
+
+/// A soft-tissue cutting trainer: layers of tissue cut apart and pulled away in real time.
+#[derive(Parser, Debug)]
+#[command(
+    name = "dissect",
+    version,
+    about,
+    after_help = "Examples:\n  dissect                                 open the trainer with the default scene\n  dissect check scenes/*.ron              check scene files\n  dissect run scenes/meninges.ron --script scenes/scripts/meninges.ron --out out/\n  dissect replay out/recording.ron\n\nScene and script formats: scenes/README.md"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Check scene files: print `ok: PATH` for each valid one, or `PATH:LINE:COLUMN: what is wrong`.
+    #[command(
+        after_help = "Exit status: 0 when every scene is valid, 1 otherwise.\n\nExample:\n  dissect check scenes/meninges.ron scenes/cylinder.ron"
+    )]
+    Check {
+        /// Scene files (RON) to check.
+        #[arg(required = true, value_name = "SCENE")]
+        scenes: Vec<PathBuf>,
+        /// Treat the files as scripts instead of scenes.
+        #[arg(long)]
+        script: bool,
+    },
+    /// Run a scene headless, driven by a script, and write what happened to a directory.
+    #[command(
+        after_help = "Example:\n  dissect run scenes/meninges.ron --script scenes/scripts/meninges.ron --out out/meninges --steps 3000"
+    )]
+    Run {
+        /// The scene file (RON).
+        #[arg(value_name = "SCENE")]
+        scene: PathBuf,
+        /// The script of instrument actions (RON).
+        #[arg(long, value_name = "SCRIPT")]
+        script: PathBuf,
+        /// Directory the results are written to (created if missing).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Steps to simulate. Default: until the script ends.
+        #[arg(long, value_name = "N")]
+        steps: Option<u64>,
+    },
+    /// Replay a recorded session.
+    #[command(after_help = "Example:\n  dissect replay out/meninges/recording.ron")]
+    Replay {
+        /// The recording file.
+        #[arg(value_name = "FILE")]
+        file: PathBuf,
+    },
+    /// Compare two runs or recordings.
+    #[command(after_help = "Example:\n  dissect compare out/a out/b")]
+    Compare {
+        /// Runs or recordings to compare.
+        #[arg(value_name = "RUN")]
+        runs: Vec<PathBuf>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        None => {
+            println!(
+                "dissect: the trainer window is not wired yet; try `dissect check scenes/meninges.ron`."
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        Some(Command::Check { scenes, script }) => Ok(check(&scenes, script)),
+        Some(Command::Run { scene, script, out, steps }) => run_headless(&scene, &script, &out, steps),
+        Some(Command::Replay { file }) => {
+            let _ = file;
+            println!("dissect replay: not yet wired");
+            Ok(ExitCode::SUCCESS)
+        }
+        Some(Command::Compare { runs }) => {
+            let _ = runs;
+            println!("dissect compare: not yet wired");
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}
+
+/// `dissect run`: the scene driven by the script, without a window; results into `out`.
+fn run_headless(
+    scene_path: &Path,
+    script_path: &Path,
+    out: &Path,
+    steps: Option<u64>,
+) -> anyhow::Result<ExitCode> {
+    let scene = match Scene::load(scene_path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    let script = match Script::load(script_path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    let result = runner::run(
+        &scene,
+        &scene_path.display().to_string(),
+        &script,
+        &script_path.display().to_string(),
+        steps,
+    )
+    .and_then(|output| runner::write_outputs(out, &output).map(|()| output));
+    match result {
+        Ok(output) => {
+            let m = &output.metrics;
+            println!(
+                "{} steps, {} elements moved, {} links cut, {} torn, step time mean {:.1} us (p99 {:.1} us); results in {}",
+                m.steps,
+                m.elements_moved_total,
+                m.links_cut,
+                m.links_torn,
+                m.step_time_us.mean,
+                m.step_time_us.p99,
+                out.display()
+            );
+            if let Some(a) = &m.assessment {
+                println!("score {:.1}: completion {:.0}%", a.score, 100.0 * a.completion);
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(e) => {
+            eprintln!("{e}");
+            Ok(ExitCode::FAILURE)
+        }
+    }
+}
+
+/// Checks every file, reporting each; failure if any is invalid.
+fn check(paths: &[PathBuf], scripts: bool) -> ExitCode {
+    let mut ok = true;
+    for path in paths {
+        let result = if scripts { Script::load(path).map(|_| ()) } else { Scene::load(path).map(|_| ()) };
+        match result {
+            Ok(()) => println!("ok: {}", path.display()),
+            Err(e) => {
+                ok = false;
+                eprintln!("{e}");
+            }
+        }
+    }
+    if ok { ExitCode::SUCCESS } else { ExitCode::FAILURE }
 }

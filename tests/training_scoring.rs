@@ -3,7 +3,8 @@
 
 mod common;
 
-use dissect::runner::{Action, Player, Point};
+use dissect::runner::Player;
+use dissect::scene::{Action, Point};
 use dissect::simulation::{InstrumentKind, World, WorldConfig};
 use dissect::tissue::CutDepth;
 use dissect::training::{Assessor, Goals, Region};

@@ -7,7 +7,7 @@ use super::ids::{ElementId, LinkId};
 /// Most elements a lattice may hold: 16 Mi elements, about 1.6 GiB of engine state.
 pub const MAX_ELEMENTS: usize = 1 << 24;
 /// Approximate bytes of engine state per element (positions, rest, flags, stamps, links, adjacency).
-pub(crate) const BYTES_PER_ELEMENT: usize = 100;
+pub const BYTES_PER_ELEMENT: usize = 100;
 
 /// Bit set on an adjacency entry's link when the element owning the entry is the link's `b` end.
 pub(crate) const SIDE_B: u32 = 1 << 31;

@@ -30,6 +30,6 @@ pub use deform::{Deformation, Pass, Workspace};
 pub use error::ChainMailError;
 pub use ids::{ElementId, LinkId, MaterialId};
 pub(crate) use lattice::SIDE_B as SIDE_B_BIT;
-pub use lattice::{Axis, GridSpec, Lattice, LinkSpec, MAX_ELEMENTS};
+pub use lattice::{Axis, BYTES_PER_ELEMENT, GridSpec, Lattice, LinkSpec, MAX_ELEMENTS};
 pub use material::{Limits, Material};
 pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};

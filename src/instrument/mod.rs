@@ -68,7 +68,7 @@ impl Instrument {
             tip: self.tip,
             axis: [a[0] / l, a[1] / l, a[2] / l],
             roll: self.roll,
-            closed: self.grasped.is_some(),
+            closed: self.grasped.is_some() && self.kind == InstrumentKind::Forceps,
         }
     }
 }
@@ -77,7 +77,7 @@ impl Instrument {
 /// once, at the start of the next step.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 pub enum Command {
-    /// Take another instrument (lets go of any grasp, ends any cut).
+    /// Take another instrument (ends any cut; what the forceps hold stays held until `Release`).
     Select(InstrumentKind),
     /// Move the tip to a world point.
     MoveTo([f32; 3]),

@@ -5,7 +5,7 @@
 
 mod player;
 
-pub use player::{Action, Player, Point};
+pub use player::{Player, resolve};
 
 use serde::Serialize;
 
@@ -170,4 +170,101 @@ impl State {
             .collect();
         Self { steps, layers, broken_links }
     }
+}
+
+/// Why a run could not start or finish.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The scene's tissue could not be built.
+    #[error("{path}: {source}")]
+    Tissue {
+        /// The scene file.
+        path: String,
+        /// The cause.
+        source: crate::tissue::TissueError,
+    },
+    /// The script does not fit the scene.
+    #[error("{path}: {reason}")]
+    Script {
+        /// The script file.
+        path: String,
+        /// What does not fit.
+        reason: String,
+    },
+    /// Writing an output failed.
+    #[error("{path}: {reason}")]
+    Write {
+        /// The file.
+        path: String,
+        /// The cause.
+        reason: String,
+    },
+}
+
+/// What a headless run leaves behind.
+pub struct RunOutput {
+    /// The world at the end.
+    pub world: World,
+    /// Its figures.
+    pub metrics: Metrics,
+    /// The assessment, when the scene has goals.
+    pub assessor: Option<crate::training::Assessor>,
+}
+
+/// Runs `script` on `scene` without a window: `steps` steps, or until the script ends. Deterministic:
+/// no time budget is used, so the same inputs give the same state bit for bit.
+pub fn run(
+    scene: &crate::scene::Scene,
+    scene_path: &str,
+    script: &crate::scene::Script,
+    script_path: &str,
+    steps: Option<u64>,
+) -> Result<RunOutput, RunError> {
+    script.check_against(scene).map_err(|reason| RunError::Script { path: script_path.into(), reason })?;
+    let mut world =
+        scene.build_world(false).map_err(|source| RunError::Tissue { path: scene_path.into(), source })?;
+    let mut assessor = scene
+        .goals
+        .clone()
+        .map(|g| crate::training::Assessor::new(g, world.tissue(), scene.simulation.rate_hz as f64));
+    let mut player = Player::new(script.0.clone());
+    let limit = steps.unwrap_or(u64::MAX);
+    let mut recorder =
+        MetricsRecorder::with_capacity(steps.unwrap_or(script.duration_steps()).min(10_000_000) as usize);
+    while world.step_count() < limit && (steps.is_some() || !player.finished()) {
+        player.feed(&mut world);
+        world.step();
+        recorder.observe(&world);
+        if let Some(a) = &mut assessor {
+            a.observe(&world);
+        }
+    }
+    let mut metrics = recorder.metrics(&world);
+    metrics.assessment = assessor.as_ref().map(|a| a.assessment(&world));
+    Ok(RunOutput { world, metrics, assessor })
+}
+
+/// Writes `metrics.json`, `state.json` and, with goals, `report.json` and `report.png` into `dir`.
+pub fn write_outputs(dir: &std::path::Path, out: &RunOutput) -> Result<(), RunError> {
+    let werr = |p: &std::path::Path, e: &dyn std::fmt::Display| RunError::Write {
+        path: p.display().to_string(),
+        reason: e.to_string(),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| werr(dir, &e))?;
+    let path = dir.join("metrics.json");
+    let text = serde_json::to_string_pretty(&out.metrics).map_err(|e| werr(&path, &e))?;
+    std::fs::write(&path, text).map_err(|e| werr(&path, &e))?;
+    let path = dir.join("state.json");
+    let state = State::of(out.world.tissue(), out.world.step_count());
+    let text = serde_json::to_string(&state).map_err(|e| werr(&path, &e))?;
+    std::fs::write(&path, text).map_err(|e| werr(&path, &e))?;
+    if let Some(a) = &out.assessor {
+        let assessment = a.assessment(&out.world);
+        let path = dir.join("report.json");
+        crate::training::write_report(&path, &assessment, a.history()).map_err(|e| werr(&path, &e))?;
+        let path = dir.join("report.png");
+        crate::training::write_plot(&path, a.history(), a.goals().stretch_limit)
+            .map_err(|e| werr(&path, &e))?;
+    }
+    Ok(())
 }

@@ -1,72 +1,15 @@
 //! The script player: timed actions in, one batch of instrument commands per step out.
 
-use serde::{Deserialize, Serialize};
-
 use crate::instrument::Command;
+use crate::scene::{Action, Point};
 use crate::simulation::{InstrumentKind, World};
-use crate::tissue::CutDepth;
 
-/// A point named in a script.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
-pub enum Point {
-    /// World coordinates, metres.
-    World(f32, f32, f32),
-    /// Fractions of the surface's `u` and `v` extent, and metres along the normal from the base surface.
-    Surface(f32, f32, f32),
-}
-
-impl Point {
-    /// The world position of the point in `world`'s tissue.
-    pub fn resolve(&self, world: &World) -> [f32; 3] {
-        match *self {
-            Point::World(x, y, z) => [x, y, z],
-            Point::Surface(u, v, h) => world.tissue().surface_point(u, v, h),
-        }
+/// The world position of a script point in `world`'s tissue.
+pub fn resolve(p: &Point, world: &World) -> [f32; 3] {
+    match *p {
+        Point::World(x, y, z) => [x, y, z],
+        Point::Surface(u, v, h) => world.tissue().surface_point(u, v, h),
     }
-}
-
-/// One timed action of a script.
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
-pub enum Action {
-    /// Take an instrument.
-    Select(InstrumentKind),
-    /// Forceps: go to a point and close on the nearest element within reach.
-    Grasp(Point),
-    /// Forceps: close on an element (recordings of picking).
-    GraspElement(u32),
-    /// Move the instrument in a straight line over `steps` steps.
-    MoveTo {
-        /// Destination.
-        to: Point,
-        /// Steps the motion takes, at least 1.
-        steps: u32,
-    },
-    /// Forceps: open.
-    Release,
-    /// Scalpel: cut along a path at a depth over `steps` steps.
-    Cut {
-        /// The blade's path.
-        path: Vec<Point>,
-        /// How deep.
-        depth: CutDepth,
-        /// Steps the stroke takes.
-        steps: u32,
-    },
-    /// Probe: from `at`, push towards `to` over `steps` steps.
-    Push {
-        /// Start of the push.
-        at: Point,
-        /// End of the push.
-        to: Point,
-        /// Steps it takes.
-        steps: u32,
-    },
-    /// Do nothing for this many steps.
-    Wait(u32),
-    /// Wait until this absolute step.
-    At(u64),
-    /// A raw instrument command, applied at once (recordings).
-    Command(Command),
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -180,7 +123,7 @@ impl Player {
             Action::Select(k) => self.select(world, k),
             Action::Grasp(p) => {
                 self.ensure(world, InstrumentKind::Forceps);
-                let p = p.resolve(world);
+                let p = resolve(&p, world);
                 self.move_to(world, p);
                 world.push(Command::Grasp);
             }
@@ -190,11 +133,11 @@ impl Player {
             }
             Action::MoveTo { to, steps } => {
                 let from = self.tip.unwrap_or(world.instrument().target);
-                self.motion = Some(Motion::new(vec![from, to.resolve(world)], steps, false));
+                self.motion = Some(Motion::new(vec![from, resolve(&to, world)], steps, false));
             }
             Action::Release => world.push(Command::Release),
             Action::Cut { path, depth, steps } => {
-                let pts: Vec<[f32; 3]> = path.iter().map(|p| p.resolve(world)).collect();
+                let pts: Vec<[f32; 3]> = path.iter().map(|p| resolve(p, world)).collect();
                 let Some(&first) = pts.first() else { return };
                 self.ensure(world, InstrumentKind::Scalpel);
                 world.push(Command::SetDepth(depth));
@@ -204,9 +147,9 @@ impl Player {
             }
             Action::Push { at, to, steps } => {
                 self.ensure(world, InstrumentKind::Probe);
-                let a = at.resolve(world);
+                let a = resolve(&at, world);
                 self.move_to(world, a);
-                self.motion = Some(Motion::new(vec![a, to.resolve(world)], steps, false));
+                self.motion = Some(Motion::new(vec![a, resolve(&to, world)], steps, false));
             }
             Action::Wait(n) => self.wait_until = Some(step + n as u64),
             Action::At(n) => self.wait_until = Some(n),

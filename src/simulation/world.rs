@@ -213,10 +213,17 @@ impl World {
     fn apply(&mut self, command: Command) {
         match command {
             Command::Select(kind) => {
-                self.release();
+                // What the forceps hold stays clamped while another instrument is in use (two-handed
+                // teasing apart); taking the forceps back takes up the grasp where it is.
                 self.instrument.cutting = false;
                 self.instrument.stroke.clear();
                 self.instrument.kind = kind;
+                if kind == InstrumentKind::Forceps
+                    && let Some(p) = self.instrument.grasped.and_then(|e| self.tissue.world_position(e))
+                {
+                    self.instrument.target = p;
+                    self.instrument.tip = p;
+                }
             }
             Command::MoveTo(p) => {
                 if !p.iter().all(|x| x.is_finite()) {

@@ -2,6 +2,11 @@
 //! cylinder (wrapping in `u`) and a sphere (wrapping in `u`, poles left out of the lattice so that no link
 //! is degenerate).
 //!
+//! Where they lie (with `u`, `v` as fractions of their range): a plane in `y = 0` with `x = (u − ½)·width`,
+//! `z = (v − ½)·depth`; a cylinder along x with `x = (v − ½)·length`, `y = −r·cos 2πu`, `z = r·sin 2πu`
+//! (the seam underneath, `u = ½` on top); a sphere with `y = −r·cos πv` (south pole at `v = 0`) and
+//! `x = −ρ·sin 2πu`, `z = −ρ·cos 2πu`, `ρ = r·sin πv`.
+//!
 //! Lattice coordinates are `(u, v, h)`: `u` and `v` are arc lengths on the base surface (metres, so
 //! that relative limits mean the same in both directions) and `h` the offset along the surface normal.
 //! A point maps to `X(u, v) + h·N(u, v)`. The normal at an element is the average of the normals of the
@@ -78,6 +83,21 @@ impl Surface {
         Ok(())
     }
 
+    /// Whether `u` wraps around (cylinder, sphere): the last element joins the first.
+    pub fn wraps_u(&self) -> bool {
+        matches!(self, Surface::Cylinder { .. } | Surface::Sphere { .. })
+    }
+
+    /// Half the largest extent of the surface (metres): a radius that contains it, for cameras.
+    pub fn half_extent(&self) -> f32 {
+        match *self {
+            Surface::Plane { width, depth } => 0.5 * width.max(depth),
+            Surface::Box { width, depth, height } => 0.5 * width.max(depth).max(height),
+            Surface::Cylinder { radius, length } => radius.max(0.5 * length),
+            Surface::Sphere { radius } => radius,
+        }
+    }
+
     /// Period of `u`, for surfaces that wrap.
     pub fn u_period(&self) -> Option<f32> {
         match *self {
@@ -130,11 +150,12 @@ impl Surface {
             Surface::Plane { .. } | Surface::Box { .. } => [u, 0.0, v],
             Surface::Cylinder { radius, .. } => {
                 let t = u / radius;
-                [radius * t.sin(), v, radius * t.cos()]
+                [v, -radius * t.cos(), radius * t.sin()]
             }
             Surface::Sphere { radius } => {
                 let (t, f) = (u / radius, v / radius);
-                [radius * f.sin() * t.sin(), radius * f.cos(), radius * f.sin() * t.cos()]
+                let rho = radius * f.sin();
+                [-rho * t.sin(), -radius * f.cos(), -rho * t.cos()]
             }
         }
     }
@@ -146,11 +167,11 @@ impl Surface {
             Surface::Plane { .. } | Surface::Box { .. } => [0.0, 1.0, 0.0],
             Surface::Cylinder { radius, .. } => {
                 let t = u / radius;
-                [t.sin(), 0.0, t.cos()]
+                [0.0, -t.cos(), t.sin()]
             }
             Surface::Sphere { radius } => {
                 let (t, f) = (u / radius, v / radius);
-                [f.sin() * t.sin(), f.cos(), f.sin() * t.cos()]
+                [-f.sin() * t.sin(), -f.cos(), -f.sin() * t.cos()]
             }
         }
     }
@@ -189,14 +210,14 @@ impl Surface {
         match *self {
             Surface::Plane { .. } | Surface::Box { .. } => [p[0], p[2], p[1]],
             Surface::Cylinder { radius, .. } => {
-                let t = p[0].atan2(p[2]);
-                let r = (p[0] * p[0] + p[2] * p[2]).sqrt();
-                [unwrap(radius * t, u_hint, 2.0 * PI * radius), p[1], r - radius]
+                let t = p[2].atan2(-p[1]);
+                let r = (p[1] * p[1] + p[2] * p[2]).sqrt();
+                [unwrap(radius * t, u_hint, 2.0 * PI * radius), p[0], r - radius]
             }
             Surface::Sphere { radius } => {
                 let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt().max(1e-12);
-                let f = (p[1] / r).clamp(-1.0, 1.0).acos();
-                let t = p[0].atan2(p[2]);
+                let f = (-p[1] / r).clamp(-1.0, 1.0).acos();
+                let t = (-p[0]).atan2(-p[2]);
                 [unwrap(radius * t, u_hint, 2.0 * PI * radius), radius * f, r - radius]
             }
         }

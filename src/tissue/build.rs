@@ -1,9 +1,9 @@
 //! Building a tissue from its description: the `(u, v, h)` lattice of one or two layers with their
 //! connective fibres, or a volume; pins; render triangles.
 
-use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use super::spec::{ConnectiveSpec, Edge, LayerSpec, Pinning};
 use super::{Damage, Geometry, Layer, LinkKind, Tissue};
 use crate::chainmail::{
     Body, ChainMailError, ElementId, GridSpec, Lattice, LinkId, LinkSpec, MAX_ELEMENTS, Material, Workspace,
@@ -28,56 +28,6 @@ pub enum TissueError {
 
 fn invalid(field: &str, reason: impl Into<String>) -> TissueError {
     TissueError::Invalid { field: field.into(), reason: reason.into() }
-}
-
-/// Which elements are pinned.
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
-pub enum Pinning {
-    /// Nothing pinned.
-    None,
-    /// Every edge of a non-wrapped axis (a plane's four edges, a cylinder's two ends); for a volume,
-    /// its base (the lowest `y` face).
-    #[default]
-    Boundary,
-    /// The listed edges of the `(u, v)` grid.
-    Edges(Vec<Edge>),
-}
-
-/// An edge of the `(u, v)` grid.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Edge {
-    /// The first column.
-    UMin,
-    /// The last column.
-    UMax,
-    /// The first row.
-    VMin,
-    /// The last row.
-    VMax,
-}
-
-/// One layer of a layered tissue.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LayerSpec {
-    /// Name shown to the trainee.
-    pub name: String,
-    /// Linear RGBA colour.
-    pub color: [f32; 4],
-    /// Offset along the surface normal from the base surface, metres.
-    pub offset: f32,
-    /// The layer's material.
-    pub material: Material,
-}
-
-/// The fibres joining two layers.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ConnectiveSpec {
-    /// Their material: limits relative to the gap between the layers.
-    pub material: Material,
-    /// Share of element pairs joined, in `(0, 1]`; the pattern is deterministic.
-    pub density: f32,
-    /// The layers never come closer than this along the normal, metres.
-    pub min_gap: f32,
 }
 
 /// Layers on a parametric surface.
@@ -191,7 +141,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
     if nl == 2 && gap <= 0.0 {
         return Err(invalid("layers", "the two layers have the same offset: expected the upper one above"));
     }
-    let connective = if nl == 2 { s.connective.clone() } else { None };
+    let connective = if nl == 2 { s.connective } else { None };
     if let Some(c) = &connective {
         c.material.validate().map_err(|e| invalid("connective.material", e.to_string()))?;
         if !(c.density > 0.0 && c.density <= 1.0) {
@@ -249,12 +199,9 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
         }
     }
     if let Some(c) = &connective {
-        // A deterministic, evenly spread pattern: pair (i, j) is joined when its low-discrepancy
-        // value falls below the density.
         for j in 0..nv {
             for i in 0..nu {
-                let x = ((i as f64) * 0.618_033_988_75 + (j as f64) * 0.754_877_666_2).fract();
-                if (x as f32) >= c.density && c.density < 1.0 {
+                if !c.joins(i as u32, j as u32) {
                     continue;
                 }
                 links.push(LinkSpec {
@@ -288,27 +235,28 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
         body.set_link_material(LinkId(l as u32), m)?;
     }
     // Pins.
-    let edges: Vec<super::build::Edge> = match &s.pinned {
-        Pinning::None => vec![],
-        Pinning::Boundary if wrapped => {
-            if matches!(s.surface, Surface::Sphere { .. }) {
-                vec![]
-            } else {
-                vec![Edge::VMin, Edge::VMax]
-            }
-        }
-        Pinning::Boundary => vec![Edge::UMin, Edge::UMax, Edge::VMin, Edge::VMax],
-        Pinning::Edges(e) => e.clone(),
+    let (edges, patch): (Vec<Edge>, Option<FractionBox>) = match &s.pinned {
+        Pinning::None => (vec![], None),
+        Pinning::Boundary if wrapped => (vec![Edge::VMin, Edge::VMax], None),
+        Pinning::Boundary => (vec![Edge::UMin, Edge::UMax, Edge::VMin, Edge::VMax], None),
+        Pinning::Edges(e) => (e.clone(), None),
+        Pinning::Patch { u, v } => (vec![], Some((*u, *v))),
     };
+    let uf = s.u_coords.clone().unwrap_or_else(|| fractions_of(&sampling.u, sampling.u_period));
+    let vf = s.v_coords.clone().unwrap_or_else(|| fractions_of(&sampling.v, None));
     for k in 0..nl {
-        for j in 0..nv {
-            for i in 0..nu {
-                let on = edges.iter().any(|e| match e {
-                    Edge::UMin => i == 0,
-                    Edge::UMax => i + 1 == nu,
-                    Edge::VMin => j == 0,
-                    Edge::VMax => j + 1 == nv,
+        for (j, &fv) in vf.iter().enumerate() {
+            for (i, &fu) in uf.iter().enumerate() {
+                let in_patch = patch.is_some_and(|((u0, u1), (v0, v1))| {
+                    fu >= u0 - 1e-6 && fu <= u1 + 1e-6 && fv >= v0 - 1e-6 && fv <= v1 + 1e-6
                 });
+                let on = in_patch
+                    || edges.iter().any(|e| match e {
+                        Edge::UMin => i == 0,
+                        Edge::UMax => i + 1 == nu,
+                        Edge::VMin => j == 0,
+                        Edge::VMax => j + 1 == nv,
+                    });
                 if on {
                     body.set_pinned(id(i, j, k), true)?;
                 }
@@ -488,6 +436,16 @@ fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
         spacing,
         body,
     })
+}
+
+/// A range of `u` and a range of `v`, as fractions.
+type FractionBox = ((f32, f32), (f32, f32));
+
+/// Fractions of a sampling's span (of the period when it wraps).
+fn fractions_of(x: &[f32], period: Option<f32>) -> Vec<f32> {
+    let (lo, hi) = (x[0], x[x.len() - 1]);
+    let span = period.unwrap_or(hi - lo).max(f32::MIN_POSITIVE);
+    x.iter().map(|v| (v - lo) / span).collect()
 }
 
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {

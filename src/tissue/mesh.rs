@@ -26,12 +26,15 @@ impl Tissue {
                 .extend(self.body.positions()[first..first + n].iter().map(|&p| self.geometry.to_world(p)));
             if slot.topology_version != self.topology_version || slot.triangles.is_empty() {
                 slot.triangles.clear();
-                slot.triangles.extend(layer.triangles.iter().filter_map(|&(t, links)| {
-                    links
+                slot.triangles.extend(
+                    layer
+                        .triangles
                         .iter()
-                        .all(|&l| l == u32::MAX || self.body.link_intact(LinkId(l)))
-                        .then(|| t.map(|v| v - layer.first))
-                }));
+                        .filter(|(_, links)| {
+                            links.iter().all(|&l| l == u32::MAX || self.body.link_intact(LinkId(l)))
+                        })
+                        .map(|&(t, _)| t.map(|v| v - layer.first)),
+                );
                 slot.topology_version = self.topology_version;
             }
             slot.normals.clear();

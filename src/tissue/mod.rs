@@ -15,9 +15,11 @@
 mod build;
 mod cut;
 mod mesh;
+mod spec;
 
-pub use build::{ConnectiveSpec, LayerSpec, LayeredSpec, Pinning, TissueError, TissueSpec, VolumeSpec};
+pub use build::{LayeredSpec, TissueError, TissueSpec, VolumeSpec};
 pub use cut::{CutDepth, CutSegment};
+pub use spec::{ConnectiveSpec, Edge, LayerSpec, Pinning};
 
 use serde::{Deserialize, Serialize};
 

@@ -90,34 +90,6 @@ fn default_separation() -> f32 {
     0.004
 }
 
-impl Goals {
-    /// Checks the goals: regions of fractions, a stretch limit above 1, positive times.
-    pub fn validate(&self) -> Result<(), (String, String)> {
-        self.target.validate().map_err(|e| ("goals.target".to_string(), e))?;
-        for (i, r) in self.forbidden.iter().enumerate() {
-            r.validate().map_err(|e| (format!("goals.forbidden[{i}]"), e))?;
-        }
-        if !(self.stretch_limit.is_finite() && self.stretch_limit > 1.0) {
-            return Err((
-                "goals.stretch_limit".into(),
-                format!("{}: expected a number above 1", self.stretch_limit),
-            ));
-        }
-        if !(self.separation.is_finite() && self.separation > 0.0) {
-            return Err((
-                "goals.separation".into(),
-                format!("{}: expected a positive number of metres", self.separation),
-            ));
-        }
-        if let Some(t) = self.time_limit_s
-            && !(t.is_finite() && t > 0.0)
-        {
-            return Err(("goals.time_limit_s".into(), format!("{t}: expected a positive number of seconds")));
-        }
-        Ok(())
-    }
-}
-
 /// One line of the score's breakdown.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 pub struct ScoreItem {

@@ -1,0 +1,61 @@
+//! From a scene to a running world: the tissue it describes, its clock and relaxation budget.
+
+use super::types::{Scene, Tissue, VolumeModel, VolumePinning};
+use crate::chainmail::RelaxBudget;
+use crate::simulation::{World, WorldConfig};
+use crate::tissue::{LayeredSpec, Pinning, TissueError, TissueSpec, VolumeSpec};
+
+impl Scene {
+    /// What the tissue builder needs.
+    pub fn tissue_spec(&self) -> Result<TissueSpec, TissueError> {
+        match &self.tissue {
+            Tissue::Layers(l) => Ok(TissueSpec::Layered(LayeredSpec {
+                surface: l.surface,
+                resolution: [l.resolution[0] as usize, l.resolution[1] as usize],
+                u_coords: Some(l.u_fractions()),
+                v_coords: Some(l.v_fractions()),
+                layers: l.layers.clone(),
+                connective: l.connective,
+                pinned: l.pinned.clone(),
+            })),
+            Tissue::Volume(v) => match v.model {
+                VolumeModel::ChainMail => Ok(TissueSpec::Volume(VolumeSpec {
+                    size: v.size,
+                    resolution: v.resolution.map(|n| n as usize),
+                    material: v.material,
+                    color: v.color,
+                    pinned: match v.pinned {
+                        VolumePinning::None => Pinning::None,
+                        VolumePinning::Base => Pinning::Boundary,
+                    },
+                })),
+                VolumeModel::Fem(_) => Err(TissueError::Invalid {
+                    field: "tissue.model".into(),
+                    reason: "a finite-element volume is not a ChainMail tissue; it runs in the FEM model"
+                        .into(),
+                }),
+            },
+        }
+    }
+
+    /// The world settings: the scene's rate and relaxation sweeps; with `interactive`, also its
+    /// relaxation time budget (which makes runs depend on the machine's speed, so headless runs leave
+    /// it out and stay bit-for-bit reproducible).
+    pub fn world_config(&self, interactive: bool) -> WorldConfig {
+        let s = &self.simulation;
+        WorldConfig {
+            rate_hz: s.rate_hz as f64,
+            relax: RelaxBudget {
+                max_sweeps: s.relax_sweeps,
+                max_time: interactive.then(|| s.relax_budget()),
+                tolerance: 0.0,
+            },
+        }
+    }
+
+    /// Builds the world the scene describes.
+    pub fn build_world(&self, interactive: bool) -> Result<World, TissueError> {
+        let tissue = crate::tissue::Tissue::build(&self.tissue_spec()?)?;
+        Ok(World::new(tissue, self.world_config(interactive)))
+    }
+}
