@@ -15,9 +15,11 @@
 //! |---|---|---|
 //! | [`chainmail`] | lattices, materials, the chain reaction, relaxation, broken links | std, serde, thiserror |
 //! | [`simulation`] | the world, the fixed-step clock, the snapshot the renderer reads | chainmail and the modules below it |
+//! | [`render`] | wgpu device, scene pipelines and buffers, orbit camera and picking rays, headless PNG capture | wgpu, glam, bytemuck, image, `simulation` (snapshot types only); never winit or egui |
 //!
 //! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
 //! `training`, `fem`) never imports wgpu, winit or egui.
 
 pub mod chainmail;
+pub mod render;
 pub mod simulation;

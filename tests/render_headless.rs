@@ -1,0 +1,208 @@
+//! Guards the headless renderer end to end on a real adapter (lavapipe in CI): a synthetic two-layer
+//! scene must match the golden image `tests/golden/two_layers.png` within a tolerance, and cutting a band
+//! out of the upper layer must change the picture there and nowhere far from it.
+//!
+//! Regenerate the golden with `DISSECT_BLESS=1 cargo test --test render_headless`, then look at it.
+//! Renders of each run are written to `target/render-test/` for inspection.
+
+use std::path::PathBuf;
+
+use dissect::render::{self, Gpu, OrbitCamera, demo};
+use dissect::simulation::{CameraSpec, Snapshot};
+use glam::{Vec2, Vec3};
+
+const WIDTH: u32 = 480;
+const HEIGHT: u32 = 320;
+
+/// Tolerance against the golden image: at most 1 % of pixels may differ by more than 8/255 on any
+/// channel. The same backend renders byte-identical images run after run, but Vulkan (lavapipe) and GL
+/// (llvmpipe) rasterise edges and MSAA coverage slightly differently, which touches a fraction of a
+/// percent of pixels (edges of the sheets, fibres and jaws); a real regression (a missing layer, wrong
+/// lighting, a moved camera) changes far more than 1 %.
+const CHANNEL_TOLERANCE: u8 = 8;
+const MAX_DIFFERING_FRACTION: f64 = 0.01;
+
+fn gpu() -> Gpu {
+    match Gpu::headless() {
+        Ok(gpu) => gpu,
+        Err(e) => panic!(
+            "render tests need a graphics adapter and none was found. {e}\n\
+             CI installs lavapipe (mesa-vulkan-drivers); without Vulkan, GL (llvmpipe via EGL) is tried."
+        ),
+    }
+}
+
+fn camera() -> OrbitCamera {
+    // Looking down at 45° onto the middle of the square from the +Z side.
+    let d = 0.11_f32;
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    OrbitCamera::from_spec(&CameraSpec { eye: [0.0, d * s, d * s], target: [0.0, 0.0, 0.0], fov_y_deg: 45.0 })
+}
+
+fn out_dir() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/render-test");
+    std::fs::create_dir_all(&dir).expect("create target/render-test");
+    dir
+}
+
+const N: u32 = 32;
+const FIBRE_STEP: u32 = 2;
+
+fn scene() -> Snapshot {
+    demo::two_layers(N, N, FIBRE_STEP)
+}
+
+/// Half-width (metres) of the band cut out of the upper layer along Z, and its extent in Z.
+const CUT_HALF_WIDTH: f32 = 0.004;
+const CUT_HALF_LENGTH: f32 = 0.028;
+
+fn in_band(x: f32, z: f32) -> bool {
+    x.abs() < CUT_HALF_WIDTH && z.abs() < CUT_HALF_LENGTH
+}
+
+/// The scene with a band of upper-layer triangles and the fibres under it removed, as a cut would; the
+/// lips of the cut retract outwards and up, stretching the fibres still attached to them into the gap.
+fn cut_scene() -> Snapshot {
+    let mut snap = scene();
+    let upper = &mut snap.layers[0];
+    let rest = upper.positions.clone();
+    upper.triangles.retain(|t| {
+        let c = t.iter().fold(Vec3::ZERO, |acc, &i| acc + Vec3::from(rest[i as usize])) / 3.0;
+        !in_band(c.x, c.z)
+    });
+    upper.topology_version += 1;
+    for p in &mut upper.positions {
+        let w = (1.0 - (p[0].abs() - CUT_HALF_WIDTH) / 0.008).clamp(0.0, 1.0)
+            * (1.0 - p[2].abs() / CUT_HALF_LENGTH).clamp(0.0, 1.0).sqrt();
+        p[0] += p[0].signum() * 0.003 * w;
+        p[1] += 0.002 * w;
+    }
+    demo::connect(&mut snap, N, N, FIBRE_STEP as usize);
+    snap.fibres.retain(|[bottom, _]| !in_band(bottom[0], bottom[2]));
+    snap.cut_path = (0..=8)
+        .map(|k| [0.0, demo::sheet_height(0.0, 0.0, 1.0) + 0.0005, -0.02 + 0.005 * k as f32])
+        .collect();
+    snap
+}
+
+/// Pixels whose largest channel difference exceeds `CHANNEL_TOLERANCE`.
+fn differs(a: &image::Rgba<u8>, b: &image::Rgba<u8>) -> bool {
+    a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > CHANNEL_TOLERANCE)
+}
+
+#[test]
+fn two_layers_match_golden() {
+    let gpu = gpu();
+    eprintln!("adapter: {}", gpu.describe());
+    let image = render::render_to_image(&gpu, &scene(), &camera(), WIDTH, HEIGHT).expect("render");
+    render::save_png(&image, out_dir().join("two_layers.png")).expect("save");
+
+    let golden_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden/two_layers.png");
+    if std::env::var_os("DISSECT_BLESS").is_some() {
+        render::save_png(&image, &golden_path).expect("write golden");
+        eprintln!("blessed {}", golden_path.display());
+        return;
+    }
+    let golden = match image::open(&golden_path) {
+        Ok(g) => g.to_rgba8(),
+        Err(e) => {
+            panic!("no golden at {} ({e}); run with DISSECT_BLESS=1 and look at it", golden_path.display())
+        }
+    };
+    assert_eq!(golden.dimensions(), image.dimensions(), "golden has another size");
+    let differing = image.pixels().zip(golden.pixels()).filter(|(a, b)| differs(a, b)).count();
+    let fraction = differing as f64 / f64::from(WIDTH * HEIGHT);
+    eprintln!("{differing} pixels ({:.3} %) differ from the golden", fraction * 100.0);
+    assert!(
+        fraction <= MAX_DIFFERING_FRACTION,
+        "{:.2} % of pixels differ from the golden by more than {CHANNEL_TOLERANCE}/255 (allowed {:.2} %); \
+         see target/render-test/two_layers.png",
+        fraction * 100.0,
+        MAX_DIFFERING_FRACTION * 100.0
+    );
+}
+
+#[test]
+fn cut_changes_the_band_and_nothing_far_from_it() {
+    let gpu = gpu();
+    let cam = camera();
+    let intact = render::render_to_image(&gpu, &scene(), &cam, WIDTH, HEIGHT).expect("render intact");
+    let cut = render::render_to_image(&gpu, &cut_scene(), &cam, WIDTH, HEIGHT).expect("render cut");
+    render::save_png(&cut, out_dir().join("two_layers_cut.png")).expect("save");
+
+    // Classify each pixel by where its ray meets the upper sheet's rim plane.
+    let vp = Vec2::new(WIDTH as f32, HEIGHT as f32);
+    let plane_y = demo::HALF_GAP + demo::DOME;
+    let (mut band, mut band_changed, mut far, mut far_changed) = (0u32, 0u32, 0u32, 0u32);
+    for (x, y, a) in intact.enumerate_pixels() {
+        let (o, d) = cam.ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), vp);
+        if d.y >= 0.0 {
+            continue;
+        }
+        let hit = o + d * ((plane_y - o.y) / d.y);
+        let changed = differs(a, cut.get_pixel(x, y));
+        // Well inside the band (away from its ends and edges, where the dome and fibres blur it).
+        if hit.x.abs() < CUT_HALF_WIDTH * 0.5 && hit.z.abs() < CUT_HALF_LENGTH * 0.7 {
+            band += 1;
+            band_changed += u32::from(changed);
+        } else if hit.x.abs() > 0.02 || hit.z.abs() > 0.045 {
+            far += 1;
+            far_changed += u32::from(changed);
+        }
+    }
+    assert!(band > 200 && far > 10_000, "classification found {band} band and {far} far pixels");
+    let band_fraction = f64::from(band_changed) / f64::from(band);
+    let far_fraction = f64::from(far_changed) / f64::from(far);
+    eprintln!("band: {band_changed}/{band} changed; far: {far_changed}/{far} changed");
+    assert!(band_fraction > 0.8, "only {:.1} % of the cut band changed", band_fraction * 100.0);
+    assert!(far_fraction < 0.002, "{:.2} % of pixels far from the cut changed", far_fraction * 100.0);
+}
+
+#[test]
+fn update_reuses_buffers_and_rejects_bad_layers() {
+    let gpu = gpu();
+    let mut renderer = render::SceneRenderer::new(&gpu, render::OFFSCREEN_FORMAT, render::Style::default());
+    let mut snap = scene();
+    renderer.update(&gpu, &snap).expect("first update");
+    assert_eq!(renderer.layer_triangles(), 2 * 2 * u64::from((N - 1) * (N - 1)));
+    // Moving vertices without a topology change keeps the index count.
+    for p in &mut snap.layers[0].positions {
+        p[1] += 0.001;
+    }
+    renderer.update(&gpu, &snap).expect("moved");
+    assert_eq!(renderer.layer_triangles(), 2 * 2 * u64::from((N - 1) * (N - 1)));
+    // Dropping a normal is reported, not drawn.
+    snap.layers[1].normals.pop();
+    let err = renderer.update(&gpu, &snap).expect_err("normals missing");
+    assert!(err.to_string().contains("layer 1"), "{err}");
+}
+
+/// Pixels close to the fibre colour (pale cream: brighter in blue than any lit tissue).
+fn fibre_like(p: &image::Rgba<u8>) -> bool {
+    let [r, g, b, _] = p.0;
+    r > 200 && g > 200 && b > 150 && g > 215
+}
+
+#[test]
+fn fibres_show_between_the_layers_from_a_low_side_view() {
+    let gpu = gpu();
+    // Low, close and from the front right: the 4 mm gap between the sheets' front edges shows.
+    let cam = OrbitCamera::from_spec(&CameraSpec {
+        eye: [0.035, 0.012, 0.075],
+        target: [0.0, 0.0, 0.035],
+        fov_y_deg: 45.0,
+    });
+    let side = render::render_to_image(&gpu, &scene(), &cam, 1280, 800).expect("render side");
+    render::save_png(&side, out_dir().join("two_layers_side.png")).expect("save");
+    let trainee = render::render_to_image(&gpu, &cut_scene(), &camera(), 1280, 800).expect("render");
+    render::save_png(&trainee, out_dir().join("two_layers_cut_1280.png")).expect("save");
+    let fibre_pixels = side.pixels().filter(|p| fibre_like(p)).count();
+    assert!(fibre_pixels > 500, "only {fibre_pixels} fibre-coloured pixels in the side view");
+    let without = {
+        let mut snap = scene();
+        snap.fibres.clear();
+        render::render_to_image(&gpu, &snap, &cam, 1280, 800).expect("render without fibres")
+    };
+    let left = without.pixels().filter(|p| fibre_like(p)).count();
+    assert!(left < fibre_pixels / 20, "{left} fibre-coloured pixels without fibres");
+}
