@@ -206,3 +206,42 @@ fn fibres_show_between_the_layers_from_a_low_side_view() {
     let left = without.pixels().filter(|p| fibre_like(p)).count();
     assert!(left < fibre_pixels / 20, "{left} fibre-coloured pixels without fibres");
 }
+
+#[test]
+fn each_instrument_is_drawn_at_its_pose() {
+    use dissect::simulation::{InstrumentKind, InstrumentPose};
+    let gpu = gpu();
+    let cam =
+        OrbitCamera::from_spec(&CameraSpec { eye: [0.0, 0.06, 0.06], target: [0.0; 3], fov_y_deg: 45.0 });
+    let mut snap = scene();
+    snap.instrument = None;
+    let bare = render::render_to_image(&gpu, &snap, &cam, WIDTH, HEIGHT).expect("render bare");
+    for (kind, closed) in
+        [(InstrumentKind::Probe, false), (InstrumentKind::Forceps, true), (InstrumentKind::Scalpel, false)]
+    {
+        snap.instrument = Some(InstrumentPose {
+            kind,
+            tip: [0.0, demo::HALF_GAP + demo::DOME + 0.001, 0.0],
+            axis: Vec3::new(0.3, 1.0, 0.4).normalize().to_array(),
+            roll: 0.3,
+            closed,
+        });
+        let image = render::render_to_image(&gpu, &snap, &cam, WIDTH, HEIGHT).expect("render");
+        render::save_png(&image, out_dir().join(format!("instrument_{kind:?}.png").to_lowercase()))
+            .expect("save");
+        // The tip sits at the middle of the view: the instrument must cover pixels around it.
+        let (tip_px, _) = cam
+            .project(
+                Vec3::from(snap.instrument.map(|p| p.tip).unwrap_or_default()),
+                Vec2::new(WIDTH as f32, HEIGHT as f32),
+            )
+            .expect("tip in view");
+        let near_tip = image
+            .enumerate_pixels()
+            .filter(|(x, y, p)| {
+                Vec2::new(*x as f32, *y as f32).distance(tip_px) < 40.0 && differs(p, bare.get_pixel(*x, *y))
+            })
+            .count();
+        assert!(near_tip > 60, "{kind:?}: only {near_tip} pixels near the tip changed");
+    }
+}

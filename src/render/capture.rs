@@ -53,8 +53,20 @@ impl Offscreen {
     pub fn render(&self, gpu: &Gpu, renderer: &SceneRenderer, camera: &OrbitCamera) -> wgpu::SubmissionIndex {
         let mut encoder =
             gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("offscreen") });
-        renderer.render(gpu, &mut encoder, &self.view, &self.target, camera);
+        self.record(gpu, renderer, &mut encoder, camera);
         gpu.queue.submit([encoder.finish()])
+    }
+
+    /// Records the scene pass into `encoder` without submitting (several offscreen views can share one
+    /// submission: each has its own camera uniform).
+    pub fn record(
+        &self,
+        gpu: &Gpu,
+        renderer: &SceneRenderer,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &OrbitCamera,
+    ) {
+        renderer.render(gpu, encoder, &self.view, &self.target, camera);
     }
 
     /// Copies the last rendered frame back to the CPU. Blocks until the GPU is done (native only: in a
