@@ -1,6 +1,7 @@
 //! Guards the headless renderer end to end on a real adapter (lavapipe in CI): a synthetic two-layer
-//! scene must match the golden image `tests/golden/two_layers.png` within a tolerance, and cutting a band
-//! out of the upper layer must change the picture there and nowhere far from it.
+//! scene, intact and cut, must match the golden images `tests/golden/two_layers{,_cut}.png` within a
+//! tolerance; cutting a band out of the upper layer must change the picture there and nowhere far from
+//! it; fibres must show between the layers; each instrument must be drawn at its pose.
 //!
 //! Regenerate the golden with `DISSECT_BLESS=1 cargo test --test render_headless`, then look at it.
 //! Renders of each run are written to `target/render-test/` for inspection.
@@ -90,14 +91,13 @@ fn differs(a: &image::Rgba<u8>, b: &image::Rgba<u8>) -> bool {
     a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > CHANNEL_TOLERANCE)
 }
 
-#[test]
-fn two_layers_match_golden() {
-    let gpu = gpu();
-    eprintln!("adapter: {}", gpu.describe());
-    let image = render::render_to_image(&gpu, &scene(), &camera(), WIDTH, HEIGHT).expect("render");
-    render::save_png(&image, out_dir().join("two_layers.png")).expect("save");
+/// Renders `snapshot` through the 45° camera and compares it with `tests/golden/{name}.png` (or writes the
+/// golden when `DISSECT_BLESS` is set).
+fn check_golden(gpu: &Gpu, name: &str, snapshot: &Snapshot) {
+    let image = render::render_to_image(gpu, snapshot, &camera(), WIDTH, HEIGHT).expect("render");
+    render::save_png(&image, out_dir().join(format!("{name}.png"))).expect("save");
 
-    let golden_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden/two_layers.png");
+    let golden_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("tests/golden/{name}.png"));
     if std::env::var_os("DISSECT_BLESS").is_some() {
         render::save_png(&image, &golden_path).expect("write golden");
         eprintln!("blessed {}", golden_path.display());
@@ -109,17 +109,29 @@ fn two_layers_match_golden() {
             panic!("no golden at {} ({e}); run with DISSECT_BLESS=1 and look at it", golden_path.display())
         }
     };
-    assert_eq!(golden.dimensions(), image.dimensions(), "golden has another size");
+    assert_eq!(golden.dimensions(), image.dimensions(), "{name}: golden has another size");
     let differing = image.pixels().zip(golden.pixels()).filter(|(a, b)| differs(a, b)).count();
     let fraction = differing as f64 / f64::from(WIDTH * HEIGHT);
-    eprintln!("{differing} pixels ({:.3} %) differ from the golden", fraction * 100.0);
+    eprintln!("{name}: {differing} pixels ({:.3} %) differ from the golden", fraction * 100.0);
     assert!(
         fraction <= MAX_DIFFERING_FRACTION,
-        "{:.2} % of pixels differ from the golden by more than {CHANNEL_TOLERANCE}/255 (allowed {:.2} %); \
-         see target/render-test/two_layers.png",
+        "{name}: {:.2} % of pixels differ from the golden by more than {CHANNEL_TOLERANCE}/255 (allowed \
+         {:.2} %); see target/render-test/{name}.png",
         fraction * 100.0,
         MAX_DIFFERING_FRACTION * 100.0
     );
+}
+
+#[test]
+fn two_layers_match_golden() {
+    let gpu = gpu();
+    eprintln!("adapter: {}", gpu.describe());
+    check_golden(&gpu, "two_layers", &scene());
+}
+
+#[test]
+fn cut_two_layers_match_golden() {
+    check_golden(&gpu(), "two_layers_cut", &cut_scene());
 }
 
 #[test]
@@ -128,7 +140,6 @@ fn cut_changes_the_band_and_nothing_far_from_it() {
     let cam = camera();
     let intact = render::render_to_image(&gpu, &scene(), &cam, WIDTH, HEIGHT).expect("render intact");
     let cut = render::render_to_image(&gpu, &cut_scene(), &cam, WIDTH, HEIGHT).expect("render cut");
-    render::save_png(&cut, out_dir().join("two_layers_cut.png")).expect("save");
 
     // Classify each pixel by where its ray meets the upper sheet's rim plane.
     let vp = Vec2::new(WIDTH as f32, HEIGHT as f32);

@@ -4,9 +4,17 @@ use super::RenderError;
 
 /// A wgpu instance, adapter, device and queue.
 ///
-/// Headless: [`Gpu::headless`] (native) or `Gpu::request(Gpu::instance(), None).await`. For a window, the
-/// app creates the instance (with the event loop's display handle, which the GL backend needs), then the
-/// surface from it, then calls [`Gpu::request`] with that surface so the adapter can present to it.
+/// Headless: [`Gpu::headless`] (native) or `Gpu::request(Gpu::instance(), None).await`.
+///
+/// For a window the app, in `ApplicationHandler::resumed`:
+/// 1. `let instance = Gpu::instance_for_display(Box::new(event_loop.owned_display_handle()));`
+/// 2. `let surface = instance.create_surface(window.clone())?;` (an `Arc<Window>`, so it is `'static`);
+/// 3. `let gpu = pollster::block_on(Gpu::request(instance, Some(&surface)))?;`
+/// 4. configures the surface (any format from `surface.get_capabilities(&gpu.adapter)`; sRGB or not, the
+///    renderer encodes correctly) and builds one [`SceneRenderer`](super::SceneRenderer) for that format
+///    and one [`SceneView`](super::SceneView) per window, resized with the window.
+///
+/// A second window reuses the same `Gpu` (create its surface from `gpu.instance`).
 #[derive(Debug)]
 pub struct Gpu {
     /// The instance; windows create their surfaces from it.
@@ -23,6 +31,13 @@ impl Gpu {
     /// An instance with no display handle, backends from `WGPU_BACKEND` if set (all by default).
     pub fn instance() -> wgpu::Instance {
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+    }
+
+    /// An instance for windows: `display` is the event loop's display handle (winit's
+    /// `event_loop.owned_display_handle()`), which the GL backend needs to present; backends from
+    /// `WGPU_BACKEND` if set.
+    pub fn instance_for_display(display: Box<dyn wgpu::wgt::WgpuHasDisplayHandle>) -> wgpu::Instance {
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(display))
     }
 
     /// Picks an adapter from `instance` (able to present to `compatible_surface` when given) and opens
