@@ -239,15 +239,17 @@ impl SceneRenderer {
     /// [`OFFSCREEN_FORMAT`](super::OFFSCREEN_FORMAT)). Uses 4× MSAA when the adapter allows it for
     /// `format`. A non-sRGB `format` (as egui wants) gets sRGB encoding in the shader instead.
     pub fn new(gpu: &Gpu, format: wgpu::TextureFormat, style: Style) -> Self {
+        Self::with_samples(gpu, format, style, MSAA_SAMPLES)
+    }
+
+    /// Like [`new`](Self::new) with `samples` per pixel (1 turns multisampling off, e.g. to trade edge
+    /// quality for speed on a software adapter); falls back to 1 if the adapter cannot do `samples`.
+    pub fn with_samples(gpu: &Gpu, format: wgpu::TextureFormat, style: Style, samples: u32) -> Self {
         let device = &gpu.device;
-        let msaa_ok =
-            gpu.adapter.get_texture_format_features(format).flags.sample_count_supported(MSAA_SAMPLES)
-                && gpu
-                    .adapter
-                    .get_texture_format_features(DEPTH_FORMAT)
-                    .flags
-                    .sample_count_supported(MSAA_SAMPLES);
-        let sample_count = if msaa_ok { MSAA_SAMPLES } else { 1 };
+        let supported = |f: wgpu::TextureFormat| {
+            samples == 1 || gpu.adapter.get_texture_format_features(f).flags.sample_count_supported(samples)
+        };
+        let sample_count = if supported(format) && supported(DEPTH_FORMAT) { samples } else { 1 };
 
         let uniform_entry = |dynamic: bool, size: u64| wgpu::BindGroupLayoutEntry {
             binding: 0,
@@ -382,7 +384,8 @@ impl SceneRenderer {
             &background_layout,
             &background_module,
             &[],
-            depth(false, wgpu::CompareFunction::Always),
+            // Drawn after the opaque scene at the far plane: only pixels nothing covered are shaded.
+            depth(false, wgpu::CompareFunction::LessEqual),
         );
 
         let object_stride =
@@ -670,8 +673,6 @@ impl SceneRenderer {
             multiview_mask: None,
         });
         pass.set_bind_group(0, &view.camera_bind_group, &[]);
-        pass.set_pipeline(&self.background_pipeline);
-        pass.draw(0..3, 0..1);
 
         let n = self.layers.len();
         let offset = |slot: usize| (slot as u64 * self.object_stride) as u32;
@@ -702,6 +703,10 @@ impl SceneRenderer {
             pass.set_vertex_buffer(0, self.fibres.buffer.slice(..u64::from(self.fibre_count) * 24));
             pass.draw(0..6, 0..self.fibre_count);
         }
+        // The background last, depth-tested at the far plane, so covered pixels cost nothing (a software
+        // rasteriser pays for every shaded fragment).
+        pass.set_pipeline(&self.background_pipeline);
+        pass.draw(0..3, 0..1);
         if self.cut_count > 0 {
             pass.set_pipeline(&self.overlay_line_pipeline);
             pass.set_bind_group(1, &self.object_bind_group, &[offset(n + 3)]);
