@@ -18,8 +18,22 @@ fn vs_main(
     var sides = array<f32, 6>(-1.0, -1.0, 1.0, -1.0, 1.0, 1.0);
     let t = ends[vi];
     let side = sides[vi];
-    let ca = camera.view_proj * vec4<f32>(a, 1.0);
-    let cb = camera.view_proj * vec4<f32>(b, 1.0);
+    var ca = camera.view_proj * vec4<f32>(a, 1.0);
+    var cb = camera.view_proj * vec4<f32>(b, 1.0);
+    // Clip the segment against a plane just in front of the eye so an end behind the camera does not
+    // flip the quad across the screen; a segment wholly behind collapses to nothing.
+    let eps = 1e-5;
+    if ca.w < eps && cb.w < eps {
+        var gone: VsOut;
+        gone.clip = vec4<f32>(0.0, 0.0, 0.0, 0.0);
+        gone.across = 0.0;
+        return gone;
+    }
+    if ca.w < eps {
+        ca = mix(ca, cb, (eps - ca.w) / (cb.w - ca.w));
+    } else if cb.w < eps {
+        cb = mix(cb, ca, (eps - cb.w) / (ca.w - cb.w));
+    }
     let vp = camera.viewport.xy;
     let sa = ca.xy / max(ca.w, 1e-6) * vp;
     let sb = cb.xy / max(cb.w, 1e-6) * vp;

@@ -182,6 +182,20 @@ fn update_reuses_buffers_and_rejects_bad_layers() {
     }
     renderer.update(&gpu, &snap).expect("moved");
     assert_eq!(renderer.layer_triangles(), 2 * 2 * u64::from((N - 1) * (N - 1)));
+    let steady = renderer.stats();
+    assert_eq!((steady.updates, steady.index_rebuilds, steady.reallocations), (2, 2, 0), "{steady:?}");
+    // A cut (fewer triangles, new topology_version) rebuilds that layer's indices only, without growing.
+    let cut = cut_scene();
+    renderer.update(&gpu, &cut).expect("cut");
+    let after = renderer.stats();
+    assert_eq!((after.index_rebuilds, after.reallocations), (3, 0), "{after:?}");
+    // A layer that grows reallocates its vertex buffers.
+    let mut bigger = demo::two_layers(2 * N, N, FIBRE_STEP);
+    bigger.layers[0].topology_version = 99;
+    bigger.layers[1].topology_version = 99;
+    renderer.update(&gpu, &bigger).expect("grown");
+    assert!(renderer.stats().reallocations >= 4, "{:?}", renderer.stats());
+    snap = bigger;
     // Dropping a normal is reported, not drawn.
     snap.layers[1].normals.pop();
     let err = renderer.update(&gpu, &snap).expect_err("normals missing");
@@ -255,4 +269,25 @@ fn each_instrument_is_drawn_at_its_pose() {
             .count();
         assert!(near_tip > 60, "{kind:?}: only {near_tip} pixels near the tip changed");
     }
+}
+
+#[test]
+fn eye_between_the_layers_does_not_smear_fibres_behind_it() {
+    let gpu = gpu();
+    // The eye sits inside the fibre forest: many fibres end behind it and must be clipped, not flipped.
+    let cam = OrbitCamera::from_spec(&CameraSpec {
+        eye: [0.001, 0.0, 0.02],
+        target: [0.0, 0.0, -0.02],
+        fov_y_deg: 60.0,
+    });
+    let image = render::render_to_image(&gpu, &scene(), &cam, WIDTH, HEIGHT).expect("render");
+    render::save_png(&image, out_dir().join("between_layers.png")).expect("save");
+    let fibre_pixels = image.pixels().filter(|p| fibre_like(p)).count();
+    let fraction = fibre_pixels as f64 / f64::from(WIDTH * HEIGHT);
+    assert!(fibre_pixels > 100, "no fibres seen between the layers");
+    assert!(
+        fraction < 0.3,
+        "{:.0} % of the view is fibre-coloured: strands behind the eye smeared",
+        fraction * 100.0
+    );
 }

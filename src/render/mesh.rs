@@ -161,7 +161,7 @@ pub enum Part {
 }
 
 impl Part {
-    /// Every part, in the order [`part_meshes`] builds them.
+    /// Every part, in the order the renderer uploads them.
     pub const ALL: [Part; 4] = [Part::Probe, Part::Jaw, Part::ScalpelHandle, Part::ScalpelBlade];
 }
 

@@ -24,4 +24,4 @@ pub use capture::{OFFSCREEN_FORMAT, Offscreen};
 pub use capture::{render_to_image, save_png};
 pub use error::RenderError;
 pub use gpu::Gpu;
-pub use scene::{SceneRenderer, SceneView, Style};
+pub use scene::{SceneRenderer, SceneView, Style, UploadStats};

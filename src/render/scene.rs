@@ -77,6 +77,18 @@ struct ObjectUniform {
 
 const OBJECT_SIZE: u64 = std::mem::size_of::<ObjectUniform>() as u64;
 
+/// Counts of the expensive uploads since the renderer was made, to check that steady frames only
+/// rewrite vertex data.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UploadStats {
+    /// Calls to [`SceneRenderer::update`].
+    pub updates: u64,
+    /// Layer index buffers rewritten (a new layer or a `topology_version` change).
+    pub index_rebuilds: u64,
+    /// GPU buffers reallocated because their data outgrew them.
+    pub reallocations: u64,
+}
+
 /// A GPU buffer that keeps its allocation and grows (by half again) only when data outgrows it.
 #[derive(Debug)]
 struct GrowBuffer {
@@ -158,6 +170,7 @@ pub struct SceneRenderer {
     cut: GrowBuffer,
     cut_count: u32,
     cut_scratch: Vec<[[f32; 3]; 2]>,
+    stats: UploadStats,
 }
 
 /// What one view (a window, or an offscreen image) needs besides the shared [`SceneRenderer`]: its
@@ -445,6 +458,7 @@ impl SceneRenderer {
             cut: GrowBuffer::new(device, "cut path", wgpu::BufferUsages::VERTEX, 24 * 256),
             cut_count: 0,
             cut_scratch: Vec::new(),
+            stats: UploadStats::default(),
         }
     }
 
@@ -503,6 +517,11 @@ impl SceneRenderer {
         })
     }
 
+    /// Upload counters since creation.
+    pub fn stats(&self) -> UploadStats {
+        self.stats
+    }
+
     /// Total triangles drawn for the tissue layers at the last [`update`](Self::update).
     pub fn layer_triangles(&self) -> u64 {
         self.layers.iter().map(|l| u64::from(l.index_count / 3)).sum()
@@ -512,6 +531,7 @@ impl SceneRenderer {
     /// layer's `topology_version` changes (or the layer is new); buffers are reallocated only on growth.
     pub fn update(&mut self, gpu: &Gpu, snapshot: &Snapshot) -> Result<(), RenderError> {
         let device = &gpu.device;
+        let mut grown = 0u64;
         self.layers.truncate(snapshot.layers.len());
         while self.layers.len() < snapshot.layers.len() {
             let n = snapshot.layers[self.layers.len()].positions.len() as u64;
@@ -541,7 +561,8 @@ impl SceneRenderer {
                         what: format!("index {max_index} out of range for {vertex_count} vertices"),
                     });
                 }
-                gpu_layer.indices.write(gpu, bytemuck::cast_slice(&layer.triangles));
+                grown += u64::from(gpu_layer.indices.write(gpu, bytemuck::cast_slice(&layer.triangles)));
+                self.stats.index_rebuilds += 1;
                 gpu_layer.index_count = layer.triangles.len() as u32 * 3;
                 gpu_layer.max_index = max_index;
                 gpu_layer.topology_version = Some(layer.topology_version);
@@ -554,16 +575,16 @@ impl SceneRenderer {
                     ),
                 });
             }
-            gpu_layer.positions.write(gpu, bytemuck::cast_slice(&layer.positions));
-            gpu_layer.normals.write(gpu, bytemuck::cast_slice(&layer.normals));
+            grown += u64::from(gpu_layer.positions.write(gpu, bytemuck::cast_slice(&layer.positions)));
+            grown += u64::from(gpu_layer.normals.write(gpu, bytemuck::cast_slice(&layer.normals)));
             gpu_layer.vertex_count = vertex_count;
         }
 
-        self.fibres.write(gpu, bytemuck::cast_slice(&snapshot.fibres));
+        grown += u64::from(self.fibres.write(gpu, bytemuck::cast_slice(&snapshot.fibres)));
         self.fibre_count = snapshot.fibres.len() as u32;
         self.cut_scratch.clear();
         self.cut_scratch.extend(snapshot.cut_path.windows(2).map(|w| [w[0], w[1]]));
-        self.cut.write(gpu, bytemuck::cast_slice(&self.cut_scratch));
+        grown += u64::from(self.cut.write(gpu, bytemuck::cast_slice(&self.cut_scratch)));
         self.cut_count = self.cut_scratch.len() as u32;
 
         // Object uniforms: one slot per layer, then two instrument parts, fibres, cut path.
@@ -614,6 +635,8 @@ impl SceneRenderer {
         put(n + 3, line(self.style.cut_color, self.style.cut_width_px));
         let grew = self.objects.write(gpu, &scratch);
         self.object_scratch = scratch;
+        self.stats.reallocations += grown + u64::from(grew);
+        self.stats.updates += 1;
         if grew {
             self.object_bind_group =
                 Self::object_bind_group(device, &self.object_layout, &self.objects.buffer);
