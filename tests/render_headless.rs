@@ -291,3 +291,20 @@ fn eye_between_the_layers_does_not_smear_fibres_behind_it() {
         fraction * 100.0
     );
 }
+
+#[test]
+fn render_in_draws_only_inside_its_rect() {
+    let gpu = gpu();
+    let mut renderer = render::SceneRenderer::new(&gpu, render::OFFSCREEN_FORMAT, render::Style::default());
+    renderer.update(&gpu, &scene()).expect("update");
+    let offscreen = render::Offscreen::new(&gpu, &renderer, WIDTH, HEIGHT).expect("target");
+    let half = WIDTH / 2;
+    offscreen.render_in(&gpu, &renderer, &camera(), [half as f32, 0.0, half as f32, HEIGHT as f32]);
+    let image = offscreen.read(&gpu).expect("read");
+    render::save_png(&image, out_dir().join("render_in_right_half.png")).expect("save");
+    let black = |p: &image::Rgba<u8>| p.0[..3].iter().all(|&c| c < 3);
+    let left_drawn = image.enumerate_pixels().filter(|(x, _, p)| *x < half && !black(p)).count();
+    let right_black = image.enumerate_pixels().filter(|(x, _, p)| *x >= half && black(p)).count();
+    assert_eq!(left_drawn, 0, "pixels drawn outside the rect");
+    assert_eq!(right_black, 0, "pixels inside the rect left uncovered");
+}

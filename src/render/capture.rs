@@ -57,6 +57,21 @@ impl Offscreen {
         gpu.queue.submit([encoder.finish()])
     }
 
+    /// Renders into `rect` = `[x, y, width, height]` of the image only (see
+    /// [`SceneRenderer::render_in`]) and submits.
+    pub fn render_in(
+        &self,
+        gpu: &Gpu,
+        renderer: &SceneRenderer,
+        camera: &OrbitCamera,
+        rect: [f32; 4],
+    ) -> wgpu::SubmissionIndex {
+        let mut encoder =
+            gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("offscreen") });
+        renderer.render_in(gpu, &mut encoder, &self.view, &self.target, camera, rect);
+        gpu.queue.submit([encoder.finish()])
+    }
+
     /// Records the scene pass into `encoder` without submitting (several offscreen views can share one
     /// submission: each has its own camera uniform).
     pub fn record(

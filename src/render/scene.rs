@@ -655,7 +655,28 @@ impl SceneRenderer {
         target: &wgpu::TextureView,
         camera: &OrbitCamera,
     ) {
-        let (w, h) = (view.width as f32, view.height as f32);
+        let full = [0.0, 0.0, view.width as f32, view.height as f32];
+        self.render_in(gpu, encoder, view, target, camera, full);
+    }
+
+    /// Like [`render`](Self::render), but draws only into `rect` = `[x, y, width, height]` (pixels, origin
+    /// top left) of the target, e.g. the central area between UI panels; the camera's aspect is the
+    /// rect's. The whole target is cleared first: draw panels afterwards. Picking rays for this view
+    /// take the cursor relative to the rect's corner and the rect's size.
+    pub fn render_in(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &SceneView,
+        target: &wgpu::TextureView,
+        camera: &OrbitCamera,
+        rect: [f32; 4],
+    ) {
+        let (vw, vh) = (view.width as f32, view.height as f32);
+        let x = rect[0].clamp(0.0, vw - 1.0);
+        let y = rect[1].clamp(0.0, vh - 1.0);
+        let w = rect[2].clamp(1.0, vw - x);
+        let h = rect[3].clamp(1.0, vh - y);
         let (forward, right, up) = camera.basis();
         let light = (-forward + 0.45 * up - 0.3 * right).normalize();
         // Line widths are given for an 800-pixel-tall view; the shader takes pixels of this view.
@@ -695,6 +716,7 @@ impl SceneRenderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        pass.set_viewport(x, y, w, h, 0.0, 1.0);
         pass.set_bind_group(0, &view.camera_bind_group, &[]);
 
         let n = self.layers.len();
