@@ -21,11 +21,14 @@
 //! | [`instrument`] | probe, forceps, scalpel: commands, pose, picking with parry3d | chainmail, tissue, simulation (types) |
 //! | [`runner`] | the script player, run metrics and final state (headless runs) | scene, simulation, training |
 //! | [`training`] | exercise goals, live assessment and score, session report and plot | tissue, simulation |
+//! | [`render`] | wgpu device, scene pipelines and buffers, orbit camera and picking rays, headless PNG capture | wgpu, glam, bytemuck, image, `simulation` (snapshot types only); never winit or egui |
 //!
 //! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
 //! `training`, `fem`) never imports wgpu, winit or egui.
+
 pub mod chainmail;
 pub mod instrument;
+pub mod render;
 pub mod runner;
 pub mod scene;
 pub mod simulation;

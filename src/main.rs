@@ -134,6 +134,10 @@ fn run_headless(
     .and_then(|output| runner::write_outputs(out, &output).map(|()| output));
     match result {
         Ok(output) => {
+            if let Err(e) = write_pictures(&scene, &output.world, out) {
+                eprintln!("{e}");
+                return Ok(ExitCode::FAILURE);
+            }
             let m = &output.metrics;
             println!(
                 "{} steps, {} elements moved, {} links cut, {} torn, step time mean {:.1} us (p99 {:.1} us); results in {}",
@@ -155,6 +159,22 @@ fn run_headless(
             Ok(ExitCode::FAILURE)
         }
     }
+}
+
+/// Renders the final state from the trainee's and the observer's cameras into `trainee.png` and
+/// `observer.png`, offscreen.
+fn write_pictures(scene: &Scene, world: &dissect::simulation::World, out: &Path) -> anyhow::Result<()> {
+    use dissect::render::{Gpu, OrbitCamera, render_to_image, save_png};
+    let gpu = Gpu::headless().map_err(|e| anyhow::anyhow!("cannot render the pictures: {e}"))?;
+    let mut snapshot = dissect::simulation::Snapshot::default();
+    world.snapshot_into(&mut snapshot);
+    for (name, camera) in [("trainee", scene.trainee_camera()), ("observer", scene.observer_camera())] {
+        let image = render_to_image(&gpu, &snapshot, &OrbitCamera::from_spec(&camera), 1280, 800)
+            .map_err(|e| anyhow::anyhow!("cannot render {name}.png: {e}"))?;
+        let path = out.join(format!("{name}.png"));
+        save_png(&image, &path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    }
+    Ok(())
 }
 
 /// Checks every file, reporting each; failure if any is invalid.

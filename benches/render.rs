@@ -1,0 +1,70 @@
+//! Renderer frame cost on whatever adapter `Gpu::headless` finds (lavapipe on the CI machines: a CPU
+//! floor, not the product's speed on a GPU).
+//!
+//! `render/frame/meninges`: one frame of the app's two views (trainee and observer cameras) of a 64 × 48
+//! two-layer snapshot, each 1280 × 800 with 4× MSAA: the snapshot upload (`update`), both passes, one
+//! submission and a blocking `device.poll` until the GPU is done. No readback. Throughput counts the
+//! layer triangles drawn across both views. `render/frame/meninges_1x`: the same, single-sampled.
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use dissect::render::{self, Gpu, Offscreen, OrbitCamera, SceneRenderer, Style, demo};
+use dissect::simulation::CameraSpec;
+
+fn frame(c: &mut Criterion) {
+    let gpu = match Gpu::headless() {
+        Ok(gpu) => gpu,
+        Err(e) => panic!("the render bench needs a graphics adapter: {e}"),
+    };
+    eprintln!("adapter: {}", gpu.describe());
+    let mut group = c.benchmark_group("render/frame");
+    group.sample_size(20);
+    // 4x MSAA (the default) and single-sampled (what a window on a CPU adapter may choose).
+    for (name, samples) in [("meninges", 4), ("meninges_1x", 1)] {
+        two_views(&gpu, &mut group, name, samples);
+    }
+    group.finish();
+}
+
+fn two_views(
+    gpu: &Gpu,
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    name: &str,
+    samples: u32,
+) {
+    let mut snapshot = demo::two_layers(64, 48, 2);
+    let mut renderer = SceneRenderer::with_samples(gpu, render::OFFSCREEN_FORMAT, Style::default(), samples);
+    renderer.update(gpu, &snapshot).expect("update");
+    let trainee =
+        OrbitCamera::from_spec(&CameraSpec { eye: [0.0, 0.078, 0.078], target: [0.0; 3], fov_y_deg: 45.0 });
+    let observer =
+        OrbitCamera::from_spec(&CameraSpec { eye: [0.09, 0.05, 0.06], target: [0.0; 3], fov_y_deg: 40.0 });
+    let views = [
+        (Offscreen::new(gpu, &renderer, 1280, 800).expect("trainee target"), trainee),
+        (Offscreen::new(gpu, &renderer, 1280, 800).expect("observer target"), observer),
+    ];
+
+    group.throughput(Throughput::Elements(renderer.layer_triangles() * views.len() as u64));
+    let mut phase = 0.0_f32;
+    group.bench_function(name, |b| {
+        b.iter(|| {
+            // Move the upper sheet a little each frame, as the simulation would.
+            phase += 0.1;
+            let lift = 0.0005 * phase.sin();
+            for p in &mut snapshot.layers[0].positions {
+                p[1] = demo::sheet_height(p[0], p[2], 1.0) + lift;
+            }
+            renderer.update(gpu, &snapshot).expect("update");
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            for (offscreen, camera) in &views {
+                offscreen.record(gpu, &renderer, &mut encoder, camera);
+            }
+            let index = gpu.queue.submit([encoder.finish()]);
+            gpu.device
+                .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
+                .expect("poll");
+        })
+    });
+}
+
+criterion_group!(benches, frame);
+criterion_main!(benches);
