@@ -14,6 +14,7 @@
 mod build;
 mod error;
 mod locate;
+mod recording;
 pub mod script;
 mod types;
 mod validate;
@@ -22,6 +23,7 @@ use std::path::Path;
 
 pub use error::SceneError;
 pub use locate::Position;
+pub use recording::{FLUSH_EVERY, Recorder, Recording};
 pub use script::{Action, CutDepth, Point, Script};
 pub use types::{
     Cameras, Connective, Edge, FemMode, FemParams, Layer, LayerTissue, Pinning, Scene, SimulationSettings,

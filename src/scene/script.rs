@@ -116,8 +116,12 @@ impl Script {
     }
 
     /// Parses and validates a script from text; `path` is used only in error messages.
+    /// A recording ([`super::Recording`]) is accepted too: its actions are the script.
     pub fn from_str(src: &str, path: impl AsRef<Path>) -> Result<Script, SceneError> {
         let path = path.as_ref();
+        if super::recording::is_recording(src) {
+            return super::Recording::from_str(src, path).map(|r| r.script());
+        }
         let script: Script = super::ron_options().from_str(src).map_err(|e| parse_error(path, src, &e))?;
         script.check().map_err(|p| p.into_error(path, src))?;
         Ok(script)

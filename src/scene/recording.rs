@@ -1,0 +1,185 @@
+//! Recordings: a session's input stream, timestamped in steps, written as it happens so that a crash
+//! loses at most the last second. A recording is a script (`At(step)` and raw `Command(..)` actions)
+//! with the scene it was made on, so `dissect replay FILE` needs nothing else and `dissect run SCENE
+//! --script FILE` accepts it as a script.
+//!
+//! ```ron
+//! Recording(
+//!     scene: "scenes/meninges.ron",
+//!     scene_source: "Scene(...)",
+//!     actions: [
+//!         At(0), Command(Select(Forceps)),
+//!         At(12), Command(MoveTo((0.0, 0.01, 0.0))),
+//!     ],
+//! )
+//! ```
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
+
+use super::error::parse_error;
+use super::{Action, SceneError, Script};
+use crate::instrument::Command;
+
+/// How often a recording reaches the disk.
+pub const FLUSH_EVERY: Duration = Duration::from_secs(1);
+
+/// A recorded session.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Recording {
+    /// Path of the scene as it was opened (for people).
+    pub scene: String,
+    /// The scene's text when the session started (what replay builds).
+    pub scene_source: String,
+    /// The input stream: `At(step)` followed by the commands given before that step.
+    pub actions: Vec<Action>,
+}
+
+/// Whether a text is a recording rather than a plain script.
+pub(crate) fn is_recording(src: &str) -> bool {
+    src.lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with("//"))
+        .is_some_and(|l| l.starts_with("Recording("))
+}
+
+/// A recording cut short by a crash ends inside its action list: keep every complete action line and
+/// close the list.
+fn repaired(src: &str) -> String {
+    let mut out = String::with_capacity(src.len() + 16);
+    let mut in_actions = false;
+    for line in src.lines() {
+        if in_actions {
+            let t = line.trim();
+            if t.starts_with(']') {
+                // Complete file: keep the rest as it is.
+                out.push_str(line);
+                out.push('\n');
+                in_actions = false;
+                continue;
+            }
+            if !t.ends_with(',') {
+                break;
+            }
+        } else if line.trim_start().starts_with("actions:") {
+            in_actions = true;
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    if in_actions {
+        out.push_str("    ],\n)\n");
+    }
+    out
+}
+
+impl Recording {
+    /// Reads a recording, repairing one that a crash cut short.
+    pub fn load(path: impl AsRef<Path>) -> Result<Recording, SceneError> {
+        let path = path.as_ref();
+        Self::from_str(&super::read(path)?, path)
+    }
+
+    /// Parses a recording from text (repairing a cut-off tail); `path` is for messages.
+    pub fn from_str(src: &str, path: impl AsRef<Path>) -> Result<Recording, SceneError> {
+        let path = path.as_ref();
+        let parsed = super::ron_options().from_str::<Recording>(src);
+        let rec = match parsed {
+            Ok(r) => r,
+            Err(e) => {
+                let fixed = repaired(src);
+                super::ron_options().from_str::<Recording>(&fixed).map_err(|_| parse_error(path, src, &e))?
+            }
+        };
+        rec.script().validate().map_err(|e| SceneError::Parse {
+            path: path.to_path_buf(),
+            line: 1,
+            column: 1,
+            message: format!("the recorded actions are not a valid script: {e}"),
+        })?;
+        Ok(rec)
+    }
+
+    /// The recorded actions as a script.
+    pub fn script(&self) -> Script {
+        Script(self.actions.clone())
+    }
+}
+
+/// Writes a recording as the session goes.
+pub struct Recorder {
+    out: BufWriter<File>,
+    path: PathBuf,
+    last_flush: Instant,
+    last_step: Option<u64>,
+}
+
+impl Recorder {
+    /// Starts a recording of a session on the scene at `scene_path` whose text is `scene_source`.
+    pub fn create(path: impl AsRef<Path>, scene_path: &str, scene_source: &str) -> std::io::Result<Self> {
+        let path = path.as_ref().to_path_buf();
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        let mut out = BufWriter::new(File::create(&path)?);
+        let quote = |s: &str| ron::to_string(s).map_err(std::io::Error::other);
+        writeln!(out, "// dissect recording: replay with `dissect replay {}`", path.display())?;
+        writeln!(out, "Recording(")?;
+        writeln!(out, "    scene: {},", quote(scene_path)?)?;
+        writeln!(out, "    scene_source: {},", quote(scene_source)?)?;
+        writeln!(out, "    actions: [")?;
+        out.flush()?;
+        Ok(Self { out, path, last_flush: Instant::now(), last_step: None })
+    }
+
+    /// Where the recording goes.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Records a command given before step `step` (the world's step count when it was queued).
+    pub fn record(&mut self, step: u64, command: &Command) -> std::io::Result<()> {
+        let c = ron::to_string(&Action::Command(command.clone())).map_err(std::io::Error::other)?;
+        if self.last_step != Some(step) {
+            writeln!(self.out, "        At({step}), {c},")?;
+            self.last_step = Some(step);
+        } else {
+            writeln!(self.out, "        {c},")?;
+        }
+        if self.last_flush.elapsed() >= FLUSH_EVERY {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Pushes what is buffered to the disk.
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.last_flush = Instant::now();
+        self.out.flush()
+    }
+
+    /// Ends the recording with a final `At(step)` so that replay runs as long as the session did.
+    pub fn finish(mut self, step: u64) -> std::io::Result<()> {
+        writeln!(self.out, "        At({step}),")?;
+        writeln!(self.out, "    ],\n)")?;
+        self.out.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cut_off_recording_is_repaired() {
+        let src = "Recording(\n    scene: \"s.ron\",\n    scene_source: \"\",\n    actions: [\n        At(0), Command(Select(Forceps)),\n        At(5), Command(MoveTo((0.0, 0.01, 0.0))),\n        At(9), Command(Mo";
+        let r = Recording::from_str(src, "r.ron").expect("repaired");
+        assert_eq!(r.actions.len(), 4);
+        assert!(is_recording(src));
+    }
+}
