@@ -52,6 +52,10 @@ enum Command {
         /// Steps to simulate. Default: until the script ends.
         #[arg(long, value_name = "N")]
         steps: Option<u64>,
+        /// Also record the session's input to this file (a recording, replayable and usable as a
+        /// script).
+        #[arg(long, value_name = "FILE")]
+        record: Option<PathBuf>,
     },
     /// Replay a recorded session.
     #[command(after_help = "Example:\n  dissect replay out/meninges/recording.ron")]
@@ -89,7 +93,9 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Some(Command::Check { scenes, script }) => Ok(check(&scenes, script)),
-        Some(Command::Run { scene, script, out, steps }) => run_headless(&scene, &script, &out, steps),
+        Some(Command::Run { scene, script, out, steps, record }) => {
+            run_headless(&scene, &script, &out, steps, record.as_deref())
+        }
         Some(Command::Replay { file }) => {
             let _ = file;
             println!("dissect replay: not yet wired");
@@ -109,6 +115,7 @@ fn run_headless(
     script_path: &Path,
     out: &Path,
     steps: Option<u64>,
+    record: Option<&Path>,
 ) -> anyhow::Result<ExitCode> {
     let scene = match Scene::load(scene_path) {
         Ok(s) => s,
@@ -124,14 +131,34 @@ fn run_headless(
             return Ok(ExitCode::FAILURE);
         }
     };
+    let mut recorder = match record {
+        Some(path) => {
+            let source = std::fs::read_to_string(scene_path).unwrap_or_default();
+            match dissect::scene::Recorder::create(path, &scene_path.display().to_string(), &source) {
+                Ok(r) => Some(r),
+                Err(e) => {
+                    eprintln!("{}: cannot write the recording: {e}", path.display());
+                    return Ok(ExitCode::FAILURE);
+                }
+            }
+        }
+        None => None,
+    };
     let result = runner::run(
         &scene,
         &scene_path.display().to_string(),
         &script,
         &script_path.display().to_string(),
         steps,
+        recorder.as_mut(),
     )
     .and_then(|output| runner::write_outputs(out, &output).map(|()| output));
+    if let (Some(r), Ok(output)) = (recorder, &result)
+        && let Err(e) = r.finish(output.world.step_count())
+    {
+        eprintln!("cannot finish the recording: {e}");
+        return Ok(ExitCode::FAILURE);
+    }
     match result {
         Ok(output) => {
             if let Err(e) = write_pictures(&scene, &output.world, out) {

@@ -212,13 +212,15 @@ pub struct RunOutput {
 }
 
 /// Runs `script` on `scene` without a window: `steps` steps, or until the script ends. Deterministic:
-/// no time budget is used, so the same inputs give the same state bit for bit.
+/// no time budget is used, so the same inputs give the same state bit for bit. With a `recorder`, the
+/// commands given to the world are recorded as they go (a recording replays to the same state).
 pub fn run(
     scene: &crate::scene::Scene,
     scene_path: &str,
     script: &crate::scene::Script,
     script_path: &str,
     steps: Option<u64>,
+    mut recording: Option<&mut crate::scene::Recorder>,
 ) -> Result<RunOutput, RunError> {
     script.check_against(scene).map_err(|reason| RunError::Script { path: script_path.into(), reason })?;
     let mut world =
@@ -231,8 +233,19 @@ pub fn run(
     let limit = steps.unwrap_or(u64::MAX);
     let mut recorder =
         MetricsRecorder::with_capacity(steps.unwrap_or(script.duration_steps()).min(10_000_000) as usize);
-    while world.step_count() < limit && (steps.is_some() || !player.finished()) {
+    while world.step_count() < limit {
         player.feed(&mut world);
+        if steps.is_none() && player.finished() && world.pending().is_empty() {
+            break;
+        }
+        if let Some(r) = recording.as_deref_mut() {
+            for c in world.pending() {
+                r.record(world.step_count(), c).map_err(|e| RunError::Write {
+                    path: r.path().display().to_string(),
+                    reason: e.to_string(),
+                })?;
+            }
+        }
         world.step();
         recorder.observe(&world);
         if let Some(a) = &mut assessor {

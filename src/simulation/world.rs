@@ -128,6 +128,11 @@ impl World {
         self.elements_moved_total
     }
 
+    /// Commands queued for the next step (what a recorder writes down).
+    pub fn pending(&self) -> &[Command] {
+        &self.commands
+    }
+
     /// Queues a command for the next step.
     pub fn push(&mut self, command: Command) {
         self.commands.push(command);

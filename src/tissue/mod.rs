@@ -187,7 +187,8 @@ impl Tissue {
         self.damage
     }
 
-    /// Largest link stretch found by the last [`Tissue::apply_tears`].
+    /// Largest stretch of an in-layer link found by the last [`Tissue::apply_tears`] (the force proxy;
+    /// connective fibres are left out, they are meant to stretch before they are cut).
     pub fn max_stretch(&self) -> f32 {
         self.max_stretch
     }
@@ -443,7 +444,10 @@ impl Tissue {
                     continue;
                 }
                 let stretch = self.world_stretch(l);
-                max_stretch = max_stretch.max(stretch);
+                // The force proxy is the layers' stretch: fibres are meant to stretch before they are cut.
+                if matches!(self.link_kind[l.index()], LinkKind::Layer(_)) {
+                    max_stretch = max_stretch.max(stretch);
+                }
                 let Some(m) = self.body.link_material(l).and_then(|m| self.body.material(m)) else {
                     continue;
                 };
