@@ -14,10 +14,12 @@
 //! | module | owns | may import |
 //! |---|---|---|
 //! | [`chainmail`] | lattices, materials, the chain reaction, relaxation, broken links | std, serde, thiserror |
+//! | [`fem`] | the linear elastic tetrahedral reference model (condensation, SMVM) and its comparison with ChainMail | std, serde, thiserror, faer, nalgebra, chainmail |
 //! | [`simulation`] | the world, the fixed-step clock, the snapshot the renderer reads | chainmail and the modules below it |
 //!
 //! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
 //! `training`, `fem`) never imports wgpu, winit or egui.
 
 pub mod chainmail;
+pub mod fem;
 pub mod simulation;
