@@ -14,6 +14,8 @@
 //!
 //! The model has a fixed topology: [`FemModel::cut`] refuses with [`FemError::CutUnsupported`].
 
+#![warn(missing_docs)]
+
 pub mod compare;
 mod dynamic;
 pub mod element;
