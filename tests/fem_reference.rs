@@ -56,12 +56,20 @@ fn patch_test_uniform_strain_is_reproduced_inside() {
 }
 
 /// A block on a roller base, its top pressed by a uniform pressure: the top moves down by
-/// δ = p L / E and the sides bulge by ν ε in both lateral directions.
+/// δ = p L / E and the sides bulge by ν ε in both lateral directions. The stress is uniform, which
+/// linear tetrahedra represent exactly with consistent nodal loads, so the tolerance (issue: "a few
+/// percent") is tightened to 1e-6 of δ; the measured error is about 1e-13.
 #[test]
 fn uniaxial_compression_matches_closed_form() {
+    for split in [Split::Six, Split::Five] {
+        uniaxial(split);
+    }
+}
+
+fn uniaxial(split: Split) {
     let (e, nu, p, h) = (3e3, 0.45, 50.0, 0.01);
     let dims = [5, 9, 4];
-    let model = load(dims, h, Split::Six, ElasticMaterial::new(e, nu), Base::Rollers);
+    let model = load(dims, h, split, ElasticMaterial::new(e, nu), Base::Rollers);
     let loads = pressure_loads(model.mesh(), Face::YMax, p).expect("loads");
     let total: f64 = loads.iter().map(|(_, f)| f[1]).sum();
     let area = (4.0 * h) * (3.0 * h);
@@ -77,12 +85,12 @@ fn uniaxial_compression_matches_closed_form() {
         // Exact field with the roller origin at (0, 0, 0): u = (ν ε x, −ε y, ν ε z).
         let exact = [nu * strain * x, -strain * y, nu * strain * z];
         for k in 0..3 {
-            assert!((d[k] - exact[k]).abs() <= 0.02 * delta, "node {n:?} axis {k}: {} vs {}", d[k], exact[k]);
+            assert!((d[k] - exact[k]).abs() <= 1e-6 * delta, "node {n:?} axis {k}: {} vs {}", d[k], exact[k]);
         }
     }
     let top = model.mesh().node_at(2, 8, 2).expect("top");
     let d = model.displacement(&u, top).expect("top");
-    assert!((d[1] + delta).abs() <= 0.02 * delta, "δ = {} vs {}", -d[1], delta);
+    assert!((d[1] + delta).abs() <= 1e-6 * delta, "δ = {} vs {}", -d[1], delta);
 }
 
 /// The condensed solve (explicit inverse, selective multiplication) and a full sparse solve without

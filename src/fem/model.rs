@@ -468,7 +468,8 @@ impl FemModel {
     /// other surface nodes. Solves the small `k × k` system `(S⁻¹)_kk f_k = d_k` for the forces at the
     /// imposed dofs, then the surface displacement `u` by selective multiplication. Returns the force
     /// (newtons) the instrument applies at each imposed node, in the order given. Components on fixed
-    /// axes are ignored (they stay at zero).
+    /// axes are ignored (they stay at zero). Allocates only the small `k × k` system and the returned
+    /// forces.
     pub fn impose(&self, imposed: &[(NodeId, [f64; 3])], u: &mut [f64]) -> Result<Vec<[f64; 3]>, FemError> {
         self.check_len("displacement vector", u.len())?;
         let mut dofs = Vec::with_capacity(3 * imposed.len());
