@@ -16,6 +16,7 @@
 //! | [`chainmail`] | lattices, materials, the chain reaction, relaxation, broken links | std, serde, thiserror |
 //! | [`surface`] | parametric surfaces X(u, v) and the (u, v, h) mapping | chainmail |
 //! | [`tissue`] | layers, connective fibres, pins, grasp and push, contact, cuts, tears, meshes | chainmail, surface |
+//! | [`fem`] | the linear elastic tetrahedral reference model (condensation, SMVM) and its comparison with ChainMail | std, serde, thiserror, faer, nalgebra, chainmail |
 //! | [`simulation`] | the world, the fixed-step clock, the snapshot the renderer reads | chainmail and the modules below it |
 //! | [`scene`] | RON scenes and scripts: schema, loading, validation, errors at `path:line:column`; builds a world | chainmail, surface, tissue, simulation, serde, ron |
 //! | [`instrument`] | probe, forceps, scalpel: commands, pose, picking with parry3d | chainmail, tissue, simulation (types) |
@@ -25,8 +26,8 @@
 //!
 //! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
 //! `training`, `fem`) never imports wgpu, winit or egui.
-
 pub mod chainmail;
+pub mod fem;
 pub mod instrument;
 pub mod render;
 pub mod runner;

@@ -1,9 +1,9 @@
 //! From a scene to a running world: the tissue it describes, its clock and relaxation budget.
 
-use super::types::{Scene, Tissue, VolumeModel, VolumePinning};
+use super::types::{FemMode, Scene, Tissue, VolumeModel, VolumePinning};
 use crate::chainmail::RelaxBudget;
 use crate::simulation::{World, WorldConfig};
-use crate::tissue::{LayeredSpec, Pinning, TissueError, TissueSpec, VolumeSpec};
+use crate::tissue::{FemSpec, LayeredSpec, Pinning, TissueError, TissueSpec, VolumeSpec};
 
 impl Scene {
     /// What the tissue builder needs.
@@ -18,23 +18,27 @@ impl Scene {
                 connective: l.connective,
                 pinned: l.pinned.clone(),
             })),
-            Tissue::Volume(v) => match v.model {
-                VolumeModel::ChainMail => Ok(TissueSpec::Volume(VolumeSpec {
-                    size: v.size,
-                    resolution: v.resolution.map(|n| n as usize),
-                    material: v.material,
-                    color: v.color,
-                    pinned: match v.pinned {
-                        VolumePinning::None => Pinning::None,
-                        VolumePinning::Base => Pinning::Boundary,
-                    },
-                })),
-                VolumeModel::Fem(_) => Err(TissueError::Invalid {
-                    field: "tissue.model".into(),
-                    reason: "a finite-element volume is not a ChainMail tissue; it runs in the FEM model"
-                        .into(),
-                }),
-            },
+            Tissue::Volume(v) => Ok(TissueSpec::Volume(VolumeSpec {
+                size: v.size,
+                resolution: v.resolution.map(|n| n as usize),
+                material: v.material,
+                color: v.color,
+                pinned: match v.pinned {
+                    VolumePinning::None => Pinning::None,
+                    VolumePinning::Base => Pinning::Boundary,
+                },
+                fem: match v.model {
+                    VolumeModel::ChainMail => None,
+                    VolumeModel::Fem(f) => Some(FemSpec {
+                        young: f.young_modulus,
+                        poisson: f.poisson_ratio,
+                        density: f.density,
+                        damping: f.damping,
+                        dynamic: f.mode == FemMode::Dynamic,
+                        dt: self.simulation.step_seconds() as f32,
+                    }),
+                },
+            })),
         }
     }
 

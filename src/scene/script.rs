@@ -191,6 +191,10 @@ impl Script {
                         scene.instruments
                     ));
                 }
+                Action::Cut { .. } if matches!(&scene.tissue, super::Tissue::Volume(v) if matches!(v.model, super::VolumeModel::Fem(_))) =>
+                {
+                    return Err(format!("action {} cuts: {}", i + 1, crate::tissue::FEM_CUT_REFUSED));
+                }
                 Action::Cut { depth: d @ (CutDepth::Between | CutDepth::Lower), .. } if layers < 2 => {
                     return Err(format!(
                         "action {} cuts at depth {d:?}, but the scene \"{}\" has one layer; expected `Upper`",

@@ -271,7 +271,7 @@ impl Scene {
             }
             Tissue::Volume(v) => {
                 let [x, y, z] = v.size;
-                ([0.0, 0.5 * y, 0.0], 0.5 * x.max(y).max(z))
+                ([0.0, 0.5 * y, 0.0], 0.5 * (x * x + y * y + z * z).sqrt())
             }
         }
     }

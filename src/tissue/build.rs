@@ -62,6 +62,8 @@ pub struct VolumeSpec {
     pub color: [f32; 4],
     /// Pin the base.
     pub pinned: Pinning,
+    /// Drive the volume with the finite-element model instead of ChainMail (base clamped).
+    pub fem: Option<super::FemSpec>,
 }
 
 /// What to build.
@@ -330,6 +332,9 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
         max_stretch: 1.0,
         spacing,
         body,
+        fem: None,
+        notice: None,
+        on_surface: vec![true; n],
     })
 }
 
@@ -408,6 +413,12 @@ fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
         }
     }
     let n = body.element_count();
+    let mut on_surface = vec![false; n];
+    for (t, _) in &triangles {
+        for &v in t {
+            on_surface[v as usize] = true;
+        }
+    }
     let layers = vec![Layer {
         name: "volume".into(),
         color: s.color,
@@ -418,6 +429,29 @@ fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
     }];
     let ws = Workspace::new(&body);
     let spacing = (0..3).map(|k| s.size[k] / (dims[k] - 1) as f32).fold(f32::MAX, f32::min);
+    let fem = match &s.fem {
+        None => None,
+        Some(f) => {
+            let h: Vec<f32> = (0..3).map(|k| s.size[k] / (dims[k] - 1) as f32).collect();
+            if h.iter().any(|x| (x - h[0]).abs() > 1e-4 * h[0]) {
+                return Err(invalid(
+                    "tissue.size",
+                    format!(
+                        "element spacing {h:?} differs between axes; a finite-element block needs one spacing"
+                    ),
+                ));
+            }
+            let mut last = -1.0f32;
+            let drive = super::FemDrive::load(dims, h[0], f, |p| {
+                if p >= last + 0.25 || p >= 1.0 {
+                    log::info!("finite-element model: {:.0}% precomputed", 100.0 * p);
+                    last = p;
+                }
+            })
+            .map_err(|e| invalid("tissue.model", e.to_string()))?;
+            Some(Box::new(drive))
+        }
+    };
     Ok(Tissue {
         ws,
         geometry: Geometry::Volume,
@@ -435,6 +469,9 @@ fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
         max_stretch: 1.0,
         spacing,
         body,
+        fem,
+        notice: None,
+        on_surface,
     })
 }
 

@@ -88,6 +88,13 @@ impl Tissue {
 
     /// Applies every queued cut; returns how many links it severed.
     pub fn apply_cuts(&mut self) -> u32 {
+        if self.fem.is_some() {
+            if !self.cut_queue.is_empty() {
+                self.cut_queue.clear();
+                self.notice = Some(super::FEM_CUT_REFUSED.to_string());
+            }
+            return 0;
+        }
         let mut count = 0;
         let queue = std::mem::take(&mut self.cut_queue);
         for seg in &queue {

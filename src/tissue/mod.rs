@@ -14,11 +14,13 @@
 
 mod build;
 mod cut;
+mod fem_drive;
 mod mesh;
 mod spec;
 
 pub use build::{LayeredSpec, TissueError, TissueSpec, VolumeSpec};
 pub use cut::{CutDepth, CutSegment};
+pub use fem_drive::{FEM_CUT_REFUSED, FemDrive, FemSpec};
 pub use spec::{ConnectiveSpec, Edge, LayerSpec, Pinning};
 
 use serde::{Deserialize, Serialize};
@@ -140,6 +142,12 @@ pub struct Tissue {
     /// Largest link stretch (world length over rest length) seen at the last check.
     pub(crate) max_stretch: f32,
     pub(crate) spacing: f32,
+    /// A finite-element model that drives this (volume) tissue instead of ChainMail.
+    pub(crate) fem: Option<Box<FemDrive>>,
+    /// Something the trainee should be told (a refused cut).
+    pub(crate) notice: Option<String>,
+    /// Elements on the outer surface (vertices of a drawn triangle): what instruments can touch.
+    pub(crate) on_surface: Vec<bool>,
 }
 
 impl Tissue {
@@ -229,7 +237,8 @@ impl Tissue {
         }
     }
 
-    /// The element nearest to a world point, optionally within one layer (lattice order).
+    /// The element on the surface nearest to a world point, optionally within one layer (lattice
+    /// order). Elements inside a volume are out of an instrument's reach.
     pub fn nearest_element(&self, p: [f32; 3], layer: Option<usize>) -> Option<ElementId> {
         let mut best: Option<(f32, u32)> = None;
         for (li, l) in self.layers.iter().enumerate() {
@@ -237,6 +246,9 @@ impl Tissue {
                 continue;
             }
             for i in l.first..l.first + l.count {
+                if !self.on_surface.get(i as usize).copied().unwrap_or(false) {
+                    continue;
+                }
                 let w = self.geometry.to_world(self.body.positions()[i as usize]);
                 let d = (w[0] - p[0]).powi(2) + (w[1] - p[1]).powi(2) + (w[2] - p[2]).powi(2);
                 if best.is_none_or(|(bd, _)| d < bd) {
@@ -272,6 +284,41 @@ impl Tissue {
     pub fn set_held(&mut self, e: ElementId, held: bool) {
         // Out-of-range ids are ignored: the instrument only holds ids this tissue issued.
         let _ = self.body.set_held(e, held);
+        if !held && let Some(fem) = &mut self.fem {
+            let body = &mut self.body;
+            fem.release(|n, _| {
+                let r = body.lattice().rest_positions()[n.index()];
+                let _ = body.set_position(n, r);
+            });
+        }
+    }
+
+    /// Whether a finite-element model drives this tissue.
+    pub fn is_fem(&self) -> bool {
+        self.fem.is_some()
+    }
+
+    /// The last thing the trainee should be told (a refused cut), taken.
+    pub fn take_notice(&mut self) -> Option<String> {
+        self.notice.take()
+    }
+
+    /// Imposes a displacement on a finite-element volume at element `e`; returns the surface nodes moved.
+    fn fem_impose(&mut self, e: ElementId, target: [f32; 3]) -> u32 {
+        let Some(fem) = &mut self.fem else { return 0 };
+        let body = &mut self.body;
+        let r = body.lattice().rest_positions()[e.index()];
+        let d = [target[0] - r[0], target[1] - r[1], target[2] - r[2]];
+        let mut moved = 0;
+        let result = fem.impose(e, d, |n, u| {
+            let r = body.lattice().rest_positions()[n.index()];
+            let _ = body.set_position(n, [r[0] + u[0], r[1] + u[1], r[2] + u[2]]);
+            moved += 1;
+        });
+        if let Err(err) = result {
+            self.notice = Some(err.to_string());
+        }
+        moved
     }
 
     pub(crate) fn activate(&mut self, e: u32) {
@@ -329,6 +376,9 @@ impl Tissue {
     pub fn pull_pass(&mut self, e: ElementId, target: [f32; 3], pass: Pass) -> (u32, f32) {
         let Ok(p) = self.body.position(e) else { return (0, 0.0) };
         let t = self.geometry.to_lattice(target, p[0]);
+        if self.fem.is_some() {
+            return (self.fem_impose(e, t), 1.0);
+        }
         let Ok(d) = self.body.deform(&mut self.ws, e, t, pass) else { return (0, 0.0) };
         self.activate_moved();
         (d.moved, d.fraction)
@@ -350,16 +400,21 @@ impl Tissue {
             Geometry::Surface(_) => ((t[0] - p[0]).powi(2) + (t[1] - p[1]).powi(2)).sqrt(),
             Geometry::Volume => ((t[0] - p[0]).powi(2) + (t[2] - p[2]).powi(2)).sqrt(),
         };
-        if lateral >= radius {
+        // The ball touches the surface between elements too: the nearest element carries the push.
+        if lateral >= radius + self.spacing {
             return 0;
         }
-        let depth = (radius * radius - lateral * lateral).sqrt();
+        let l = lateral.min(0.7 * radius);
+        let depth = (radius * radius - l * l).sqrt();
         let limit = t[axis] - depth;
         if p[axis] <= limit {
             return 0;
         }
         let mut goal = p;
         goal[axis] = limit;
+        if self.fem.is_some() {
+            return self.fem_impose(e, goal);
+        }
         let Ok(d) = self.body.deform(&mut self.ws, e, goal, pass) else { return 0 };
         self.activate_moved();
         d.moved
@@ -367,7 +422,7 @@ impl Tissue {
 
     /// Relaxes the disturbed region within `budget`; forgets the region once it has converged.
     pub fn relax(&mut self, budget: RelaxBudget) -> crate::chainmail::RelaxReport {
-        if self.active.is_empty() {
+        if self.active.is_empty() || self.fem.is_some() {
             return crate::chainmail::RelaxReport { converged: true, ..Default::default() };
         }
         let report = self.body.relax_elements(&mut self.ws, budget, &self.active);
@@ -425,6 +480,9 @@ impl Tissue {
     /// Breaks every link near the disturbed region stretched past its material's tear ratio (world
     /// length over rest length), counting them as torn. Also records the largest stretch seen.
     pub fn apply_tears(&mut self) -> u32 {
+        if self.fem.is_some() {
+            return 0;
+        }
         let mut torn = 0;
         let mut max_stretch = 0.0f32;
         let count = self.active.len();

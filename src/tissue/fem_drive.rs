@@ -1,0 +1,104 @@
+//! A volume driven by the linear finite-element model instead of ChainMail (Bro-Nielsen and Cotin):
+//! the ChainMail lattice keeps the geometry, the surface mesh and the picking; grasps and pushes impose
+//! displacements on surface nodes, and the condensed, pre-inverted model gives the surface's answer by
+//! selective matrix-vector multiplication. Cutting is refused: condensation assumes a fixed topology.
+
+use crate::chainmail::ElementId;
+use crate::fem::{
+    Base, DynamicModel, DynamicParams, ElasticMaterial, FemError, FemModel, LoadOptions, NodeId, Split,
+    Supports, TetMesh,
+};
+
+/// Why a cut on a finite-element volume is refused.
+pub const FEM_CUT_REFUSED: &str = "cutting is refused for a finite-element volume: its condensed, pre-inverted stiffness assumes a fixed topology";
+
+/// Parameters of a finite-element volume.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FemSpec {
+    /// Young's modulus, pascals.
+    pub young: f32,
+    /// Poisson's ratio, in (-1, 0.5).
+    pub poisson: f32,
+    /// Mass density, kg/m³.
+    pub density: f32,
+    /// Mass-proportional damping, 1/s (dynamic mode).
+    pub damping: f32,
+    /// Integrate in time (mass and damping) instead of solving for equilibrium every step.
+    pub dynamic: bool,
+    /// Simulation step, seconds (dynamic mode).
+    pub dt: f32,
+}
+
+/// The model and its current surface displacement.
+#[derive(Clone, Debug)]
+pub struct FemDrive {
+    model: FemModel,
+    dynamic: Option<DynamicModel>,
+    /// Condensed displacement (static mode).
+    u: Vec<f64>,
+}
+
+impl FemDrive {
+    /// Loads the model for a block of `dims` nodes at `spacing` metres, base clamped. Reports progress
+    /// in `[0, 1]` to `progress`.
+    pub fn load(
+        dims: [usize; 3],
+        spacing: f32,
+        spec: &FemSpec,
+        progress: impl FnMut(f32),
+    ) -> Result<Self, FemError> {
+        let mesh = TetMesh::block(dims, spacing as f64, Split::Six)?;
+        let supports = Supports::base(&mesh, Base::Clamped);
+        let material = ElasticMaterial {
+            young: spec.young as f64,
+            poisson: spec.poisson as f64,
+            density: spec.density as f64,
+        };
+        let options = LoadOptions::default();
+        let model = FemModel::load(mesh, material, &supports, &options, progress)?;
+        let dynamic = if spec.dynamic {
+            Some(DynamicModel::new(
+                &model,
+                DynamicParams { dt: spec.dt as f64, damping: spec.damping as f64 },
+                &options,
+            )?)
+        } else {
+            None
+        };
+        let u = vec![0.0; model.condensed_dofs()];
+        Ok(Self { model, dynamic, u })
+    }
+
+    /// Imposes `displacement` (metres) on the surface node of element `e` and returns every surface
+    /// node's displacement through `out(element, displacement)`.
+    pub fn impose(
+        &mut self,
+        e: ElementId,
+        displacement: [f32; 3],
+        mut out: impl FnMut(ElementId, [f32; 3]),
+    ) -> Result<(), FemError> {
+        let d = displacement.map(f64::from);
+        let forces = self.model.impose(&[(NodeId(e.0), d)], &mut self.u)?;
+        if let Some(dynamic) = &mut self.dynamic {
+            let u = dynamic.step(&[(NodeId(e.0), forces[0])])?;
+            self.u.copy_from_slice(u);
+        }
+        for &n in self.model.surface_nodes() {
+            if let Some(v) = self.model.displacement(&self.u, n) {
+                out(ElementId(n.0), v.map(|x| x as f32));
+            }
+        }
+        Ok(())
+    }
+
+    /// Lets go: no imposed displacement, the block returns to rest.
+    pub fn release(&mut self, mut out: impl FnMut(ElementId, [f32; 3])) {
+        self.u.fill(0.0);
+        if let Some(d) = &mut self.dynamic {
+            d.reset();
+        }
+        for &n in self.model.surface_nodes() {
+            out(ElementId(n.0), [0.0; 3]);
+        }
+    }
+}
