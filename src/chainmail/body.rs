@@ -35,9 +35,23 @@ pub struct Body {
     /// Constraint box `[lo, hi]` on `p[b] - p[a]`, with the wrap jump folded in.
     pub(crate) link_box: Vec<[[f32; 3]; 2]>,
     pub(crate) link_state: Vec<u8>,
-    /// Relaxation weight per adjacency entry: the link's stiffness, 0 when broken.
-    pub(crate) adj_w: Vec<f32>,
+    /// Width of the fixed-width (ELL) adjacency below: the lattice's largest degree (at least 1).
+    /// Element `i` owns slots `i * width .. (i + 1) * width`: its lattice adjacency entries in the
+    /// lattice's order, then padding slots that point back at `i` itself. A constant trip count
+    /// lets the hot loops run without per-element bounds and unroll on grids (width 4 or 6).
+    pub(crate) width: usize,
+    /// Neighbour of each slot (the owner itself for padding).
+    pub(crate) slot_nbr: Vec<u32>,
+    /// Constraint box `[lo, hi]` on `p[owner] - p[nbr]` per slot, wrap jump folded in: the link's box
+    /// as seen from the slot's owner. `[-inf, inf]` when the link is broken and for padding, so such a
+    /// slot neither pulls a candidate nor bounds a relaxation step.
+    pub(crate) slot_box: Vec<[[f32; 3]; 2]>,
+    /// Relaxation weight per slot: the link's stiffness, 0 when broken and for padding.
+    pub(crate) slot_w: Vec<f32>,
 }
+
+/// The box of a slot whose link is broken, and of padding slots: no constraint at all.
+pub(crate) const FREE_BOX: [[f32; 3]; 2] = [[f32::NEG_INFINITY; 3], [f32::INFINITY; 3]];
 
 impl Body {
     /// A body at rest with every link of `material`.
@@ -45,14 +59,28 @@ impl Body {
         material.validate()?;
         let n = lattice.element_count();
         let m = lattice.link_count();
+        let width = (0..n)
+            .map(|i| (lattice.adj_start[i + 1] - lattice.adj_start[i]) as usize)
+            .max()
+            .unwrap_or(0)
+            .max(1);
+        let mut slot_nbr = Vec::with_capacity(n * width);
+        for i in 0..n {
+            let (s0, s1) = (lattice.adj_start[i] as usize, lattice.adj_start[i + 1] as usize);
+            slot_nbr.extend_from_slice(&lattice.adj_nbr[s0..s1]);
+            slot_nbr.resize((i + 1) * width, i as u32);
+        }
         let mut body = Self {
+            width,
+            slot_box: vec![FREE_BOX; slot_nbr.len()],
+            slot_w: vec![0.0; slot_nbr.len()],
+            slot_nbr,
             pos: lattice.rest.clone(),
             flags: vec![0; n],
             materials: vec![material],
             link_material: vec![MaterialId(0); m],
             link_box: vec![[[0.0; 3]; 2]; m],
             link_state: vec![INTACT; m],
-            adj_w: vec![material.stiffness; lattice.adj_nbr.len()],
             lattice,
         };
         for l in 0..m {
@@ -66,12 +94,27 @@ impl Body {
         let mat = &self.materials[self.link_material[l].index()];
         let (lo, hi) = mat.link_box(lat.rest_offset[l], lat.axis[l] as usize, lat.scale[l]);
         let j = lat.jump[l];
-        self.link_box[l] = [sub(lo, j), sub(hi, j)];
+        let [lo, hi] = [sub(lo, j), sub(hi, j)];
+        self.link_box[l] = [lo, hi];
         if self.link_state[l] == INTACT {
-            let [sa, sb] = lat.link_slots[l];
-            self.adj_w[sa as usize] = mat.stiffness;
-            self.adj_w[sb as usize] = mat.stiffness;
+            let [sa, sb] = self.slots_of(l);
+            // `a`'s slot bounds `p[a] - p[b]`, the negated box; `b`'s slot bounds `p[b] - p[a]`.
+            self.slot_box[sa] = [hi.map(|x| -x), lo.map(|x| -x)];
+            self.slot_box[sb] = [lo, hi];
+            self.slot_w[sa] = mat.stiffness;
+            self.slot_w[sb] = mat.stiffness;
         }
+    }
+
+    /// The two slots of link `l` (in its `a` end's row, in its `b` end's row).
+    fn slots_of(&self, l: usize) -> [usize; 2] {
+        let lat = &self.lattice;
+        let [a, b] = lat.ends[l];
+        let [ea, eb] = lat.link_slots[l];
+        [
+            a as usize * self.width + (ea - lat.adj_start[a as usize]) as usize,
+            b as usize * self.width + (eb - lat.adj_start[b as usize]) as usize,
+        ]
     }
 
     /// The lattice this body is built on.
@@ -246,9 +289,10 @@ impl Body {
             return Ok(false);
         }
         self.link_state[i] = reason as u8;
-        let [sa, sb] = self.lattice.link_slots[i];
-        self.adj_w[sa as usize] = 0.0;
-        self.adj_w[sb as usize] = 0.0;
+        for s in self.slots_of(i) {
+            self.slot_w[s] = 0.0;
+            self.slot_box[s] = FREE_BOX;
+        }
         Ok(true)
     }
 
