@@ -10,7 +10,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::body::{Body, FIXED};
+use super::body::{Body, FIXED, SlotClass};
 use super::deform::Workspace;
 use super::ids::ElementId;
 
@@ -98,8 +98,8 @@ impl Body {
             self.pos[i],
             self.lattice.rest[i],
             &self.slot_nbr[row.clone()],
-            &self.slot_box[row.clone()],
-            &self.slot_w[row],
+            &self.classes,
+            &self.slot_class[row],
         )
     }
 
@@ -117,14 +117,12 @@ impl Body {
     fn sweep_all_width(&mut self, ws: &mut Workspace, width: usize) -> f32 {
         let mut change = 0.0f32;
         let (pos, rest) = (&self.pos[..], &self.lattice.rest[..]);
-        let rows = self
-            .slot_nbr
-            .chunks_exact(width)
-            .zip(self.slot_box.chunks_exact(width))
-            .zip(self.slot_w.chunks_exact(width));
+        let rows = self.slot_nbr.chunks_exact(width).zip(self.slot_class.chunks_exact(width));
         let elements = pos.iter().zip(rest).zip(&self.flags).zip(&mut ws.next[..]);
-        for (((nbrs, boxes), weights), (((&p, &r), &flags), next)) in rows.zip(elements) {
-            let q = if flags & FIXED != 0 { p } else { relaxed_row(pos, rest, p, r, nbrs, boxes, weights) };
+        let classes = &self.classes[..];
+        for ((nbrs, slot_class), (((&p, &r), &flags), next)) in rows.zip(elements) {
+            let q =
+                if flags & FIXED != 0 { p } else { relaxed_row(pos, rest, p, r, nbrs, classes, slot_class) };
             change = max_change(change, p, q);
             *next = q;
         }
@@ -202,8 +200,8 @@ fn max_change(change: f32, p: [f32; 3], q: [f32; 3]) -> f32 {
     m
 }
 
-/// The relaxed position of an element at `p` (rest `r`) whose adjacency row is `nbrs`, `boxes` (on
-/// `p[owner] - p[nbr]`) and `weights`. Broken links and padding slots have weight 0 and an infinite
+/// The relaxed position of an element at `p` (rest `r`) whose adjacency row is `nbrs` and
+/// `slot_class` (boxes on `p[owner] - p[nbr]` and weights in `classes`). Broken links and padding slots have weight 0 and an infinite
 /// box: they add exactly nothing (the sums start at +0, so adding ±0 leaves them bit for bit).
 #[inline(always)]
 fn relaxed_row(
@@ -212,14 +210,16 @@ fn relaxed_row(
     p: [f32; 3],
     r: [f32; 3],
     nbrs: &[u32],
-    boxes: &[[[f32; 3]; 2]],
-    weights: &[f32],
+    classes: &[SlotClass],
+    slot_class: &[u32],
 ) -> [f32; 3] {
+    let rest = &rest[..pos.len()];
     let mut acc = [0.0f32; 3];
     let mut wsum = 0.0f32;
     let mut lo = [f32::NEG_INFINITY; 3];
     let mut hi = [f32::INFINITY; 3];
-    for ((&j, &[blo, bhi]), &w) in nbrs.iter().zip(boxes).zip(weights) {
+    for (&j, &class) in nbrs.iter().zip(slot_class) {
+        let SlotClass { bounds: [blo, bhi], w } = classes[class as usize];
         let j = j as usize;
         let (pj, rj) = (pos[j], rest[j]);
         for c in 0..3 {
