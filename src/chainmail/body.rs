@@ -1,5 +1,7 @@
 //! A deformable body: a lattice with current positions, pins, materials and broken links.
 
+use std::collections::HashMap;
+
 use super::error::ChainMailError;
 use super::ids::{ElementId, LinkId, MaterialId};
 use super::lattice::{Lattice, norm, sub};
@@ -35,8 +37,41 @@ pub struct Body {
     /// Constraint box `[lo, hi]` on `p[b] - p[a]`, with the wrap jump folded in.
     pub(crate) link_box: Vec<[[f32; 3]; 2]>,
     pub(crate) link_state: Vec<u8>,
-    /// Relaxation weight per adjacency entry: the link's stiffness, 0 when broken.
-    pub(crate) adj_w: Vec<f32>,
+    /// Width of the fixed-width (ELL) adjacency below: the lattice's largest degree (at least 1).
+    /// Element `i` owns slots `i * width .. (i + 1) * width`: its lattice adjacency entries in the
+    /// lattice's order, then padding slots that point back at `i` itself. A constant trip count
+    /// lets the hot loops run without per-element bounds and unroll on grids (width 4 or 6).
+    pub(crate) width: usize,
+    /// Neighbour of each slot (the owner itself for padding).
+    pub(crate) slot_nbr: Vec<u32>,
+    /// Class of each slot: an index into `classes`. Slots share classes (a uniform grid has a handful),
+    /// so the hot loops read 8 bytes per slot and find the boxes in cache.
+    pub(crate) slot_class: Vec<u32>,
+    /// The distinct slot classes; entry 0 is [`SlotClass::FREE`].
+    pub(crate) classes: Vec<SlotClass>,
+    /// Where each class sits in `classes`, by its bits.
+    class_index: HashMap<[u32; 8], u32>,
+}
+
+/// What a slot's link demands, as seen from the slot's owner.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct SlotClass {
+    /// Constraint box `[lo, hi]` on `p[owner] - p[nbr]`, wrap jump folded in.
+    pub(crate) bounds: [[f32; 3]; 2],
+    /// Relaxation weight: the link's stiffness.
+    pub(crate) w: f32,
+}
+
+impl SlotClass {
+    /// Broken links and padding slots: an infinite box and no weight, so such a slot neither pulls a
+    /// candidate nor bounds or drives a relaxation step.
+    pub(crate) const FREE: Self = Self { bounds: [[f32::NEG_INFINITY; 3], [f32::INFINITY; 3]], w: 0.0 };
+
+    fn key(&self) -> [u32; 8] {
+        let [lo, hi] = self.bounds;
+        [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], self.w, 0.0].map(f32::to_bits)
+    }
 }
 
 impl Body {
@@ -45,14 +80,29 @@ impl Body {
         material.validate()?;
         let n = lattice.element_count();
         let m = lattice.link_count();
+        let width = (0..n)
+            .map(|i| (lattice.adj_start[i + 1] - lattice.adj_start[i]) as usize)
+            .max()
+            .unwrap_or(0)
+            .max(1);
+        let mut slot_nbr = Vec::with_capacity(n * width);
+        for i in 0..n {
+            let (s0, s1) = (lattice.adj_start[i] as usize, lattice.adj_start[i + 1] as usize);
+            slot_nbr.extend_from_slice(&lattice.adj_nbr[s0..s1]);
+            slot_nbr.resize((i + 1) * width, i as u32);
+        }
         let mut body = Self {
+            width,
+            slot_class: vec![0; slot_nbr.len()],
+            classes: vec![SlotClass::FREE],
+            class_index: HashMap::from([(SlotClass::FREE.key(), 0)]),
+            slot_nbr,
             pos: lattice.rest.clone(),
             flags: vec![0; n],
             materials: vec![material],
             link_material: vec![MaterialId(0); m],
             link_box: vec![[[0.0; 3]; 2]; m],
             link_state: vec![INTACT; m],
-            adj_w: vec![material.stiffness; lattice.adj_nbr.len()],
             lattice,
         };
         for l in 0..m {
@@ -66,12 +116,64 @@ impl Body {
         let mat = &self.materials[self.link_material[l].index()];
         let (lo, hi) = mat.link_box(lat.rest_offset[l], lat.axis[l] as usize, lat.scale[l]);
         let j = lat.jump[l];
-        self.link_box[l] = [sub(lo, j), sub(hi, j)];
+        let [lo, hi] = [sub(lo, j), sub(hi, j)];
+        self.link_box[l] = [lo, hi];
         if self.link_state[l] == INTACT {
-            let [sa, sb] = lat.link_slots[l];
-            self.adj_w[sa as usize] = mat.stiffness;
-            self.adj_w[sb as usize] = mat.stiffness;
+            let [sa, sb] = self.slots_of(l);
+            // `a`'s slot bounds `p[a] - p[b]`, the negated box; `b`'s slot bounds `p[b] - p[a]`.
+            let w = mat.stiffness;
+            self.slot_class[sa] = self.intern(SlotClass { bounds: [hi.map(|x| -x), lo.map(|x| -x)], w });
+            self.slot_class[sb] = self.intern(SlotClass { bounds: [lo, hi], w });
         }
+    }
+
+    /// The index of `class` in the class table, added if new. Classes no slot uses any more (after
+    /// material changes) are dropped by rebuilding the table once it holds more than twice the
+    /// classes the slots could need.
+    fn intern(&mut self, class: SlotClass) -> u32 {
+        if let Some(&i) = self.class_index.get(&class.key()) {
+            return i;
+        }
+        if self.classes.len() > 2 * self.slot_class.len() + 16 {
+            self.rebuild_classes();
+            if let Some(&i) = self.class_index.get(&class.key()) {
+                return i;
+            }
+        }
+        let i = self.classes.len() as u32;
+        self.classes.push(class);
+        self.class_index.insert(class.key(), i);
+        i
+    }
+
+    /// Rebuilds the class table with only the classes in use.
+    fn rebuild_classes(&mut self) {
+        let old = std::mem::replace(&mut self.classes, vec![SlotClass::FREE]);
+        self.class_index = HashMap::from([(SlotClass::FREE.key(), 0)]);
+        for k in 0..self.slot_class.len() {
+            let c = old[self.slot_class[k] as usize];
+            let i = match self.class_index.get(&c.key()) {
+                Some(&i) => i,
+                None => {
+                    self.classes.push(c);
+                    let i = self.classes.len() as u32 - 1;
+                    self.class_index.insert(c.key(), i);
+                    i
+                }
+            };
+            self.slot_class[k] = i;
+        }
+    }
+
+    /// The two slots of link `l` (in its `a` end's row, in its `b` end's row).
+    fn slots_of(&self, l: usize) -> [usize; 2] {
+        let lat = &self.lattice;
+        let [a, b] = lat.ends[l];
+        let [ea, eb] = lat.link_slots[l];
+        [
+            a as usize * self.width + (ea - lat.adj_start[a as usize]) as usize,
+            b as usize * self.width + (eb - lat.adj_start[b as usize]) as usize,
+        ]
     }
 
     /// The lattice this body is built on.
@@ -246,9 +348,9 @@ impl Body {
             return Ok(false);
         }
         self.link_state[i] = reason as u8;
-        let [sa, sb] = self.lattice.link_slots[i];
-        self.adj_w[sa as usize] = 0.0;
-        self.adj_w[sb as usize] = 0.0;
+        for s in self.slots_of(i) {
+            self.slot_class[s] = 0;
+        }
         Ok(true)
     }
 
@@ -324,5 +426,33 @@ impl Body {
             e += 0.5 * w * s;
         }
         e
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn class_table_stays_small_under_live_tuning() {
+        let lattice = Lattice::sheet(6, 5, 0.01).expect("sheet");
+        let mut body = Body::new(lattice, Material::default()).expect("body");
+        // A uniform sheet: the free class and one per (axis, side), a few more where the f32 spacing
+        // rounds differently.
+        assert!(body.classes.len() < 16, "{} classes", body.classes.len());
+        for k in 0..500 {
+            let m = Material::relative(1.0 + k as f32 * 1e-3, 0.8, 0.3);
+            body.set_material(MaterialId(0), m).expect("tune");
+        }
+        assert!(body.classes.len() <= 2 * body.slot_class.len() + 17);
+        for (s, &c) in body.slot_class.iter().enumerate() {
+            let i = s / body.width;
+            let class = body.classes[c as usize];
+            if body.slot_nbr[s] as usize == i {
+                assert_eq!(class, SlotClass::FREE, "padding slot");
+            } else {
+                assert!(class.w == 1.0 && class.bounds[1][0] - class.bounds[0][0] > 0.0);
+            }
+        }
     }
 }

@@ -1,9 +1,9 @@
 //! The chain reaction: one element is moved, its neighbours follow only as far as their links demand.
 
-use super::body::{Body, FIXED, INTACT};
+use super::body::{Body, FIXED};
 use super::error::{ChainMailError, finite};
 use super::ids::ElementId;
-use super::lattice::SIDE_B;
+use super::lattice::{Lattice, SIDE_B};
 
 /// Which coordinates a deformation constrains and moves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -40,10 +40,8 @@ pub struct Workspace {
     old: Vec<[f32; 3]>,
     /// The sponsor of each moved element (itself for the source), valid where stamped.
     sponsor: Vec<u32>,
-    /// Elements moved by the current deformation, in order.
+    /// Elements moved by the current deformation, in order; also the chain reaction's queue.
     pub(crate) moved: Vec<u32>,
-    /// Candidates `[element, link | side, sponsor]`; each moved element adds at most its degree.
-    queue: Vec<[u32; 3]>,
     /// Relaxation's second buffer.
     pub(crate) next: Vec<[f32; 3]>,
 }
@@ -82,10 +80,6 @@ impl Workspace {
             self.next = vec![[0.0; 3]; n];
             self.moved = Vec::with_capacity(n);
         }
-        let q = body.lattice.adj_nbr.len() + 1;
-        if self.queue.capacity() < q {
-            self.queue = Vec::with_capacity(q);
-        }
     }
 
     /// Elements moved by the last deformation, in the order they moved (the source first).
@@ -112,7 +106,6 @@ impl Workspace {
         }
         self.generation += 1;
         self.moved.clear();
-        self.queue.clear();
     }
 
     fn rollback(&mut self, pos: &mut [[f32; 3]]) {
@@ -210,82 +203,101 @@ impl Body {
     /// workspace); when a fixed element would have to move, everything is rolled back and `false`
     /// returned.
     fn chain_reaction(&mut self, ws: &mut Workspace, source: usize, goal: [f32; 3], mask: [bool; 3]) -> bool {
+        match mask {
+            [true, true, true] => self.chain_reaction_in::<0b111>(ws, source, goal),
+            [true, true, false] => self.chain_reaction_in::<0b011>(ws, source, goal),
+            [false, false, true] => self.chain_reaction_in::<0b100>(ws, source, goal),
+            _ => unreachable!("Pass::mask gives one of three masks"),
+        }
+    }
+
+    /// The chain reaction for a constant coordinate mask (bit `k` set: coordinate `k` is constrained
+    /// and moved).
+    ///
+    /// The list of moved elements is the queue. A candidate is checked against its sponsor as soon as
+    /// the sponsor's row is scanned rather than when it would have left a separate queue: both
+    /// positions involved are final by then (the sponsor has moved, the candidate has not), and rows
+    /// are scanned in the order elements moved, so the moves, their order and their sponsors are those
+    /// of a FIFO queue of `(candidate, link, sponsor)` entries, while each element enters the list at
+    /// most once and no candidate that stays put is queued.
+    fn chain_reaction_in<const MASK: u8>(
+        &mut self,
+        ws: &mut Workspace,
+        source: usize,
+        goal: [f32; 3],
+    ) -> bool {
+        // Constant widths let the row loop unroll: 4 on sheets, 6 in volumes.
+        match self.width {
+            4 => self.chain_reaction_rows::<MASK>(ws, source, goal, 4),
+            6 => self.chain_reaction_rows::<MASK>(ws, source, goal, 6),
+            w => self.chain_reaction_rows::<MASK>(ws, source, goal, w),
+        }
+    }
+
+    #[inline(always)]
+    fn chain_reaction_rows<const MASK: u8>(
+        &mut self,
+        ws: &mut Workspace,
+        source: usize,
+        goal: [f32; 3],
+        width: usize,
+    ) -> bool {
         ws.next_generation();
-        let generation = ws.generation;
-        let lat = &self.lattice;
+        let g = ws.generation;
+        let (nbrs, classes, slot_class, flags) =
+            (&self.slot_nbr[..], &self.classes[..], &self.slot_class[..], &self.flags[..]);
         let pos = &mut self.pos[..];
-        let stamp = &mut ws.stamp[..];
-        let old = &mut ws.old[..];
-        let sponsor = &mut ws.sponsor[..];
+        let (stamp, old, sponsor, moved) =
+            (&mut ws.stamp[..], &mut ws.old[..], &mut ws.sponsor[..], &mut ws.moved);
 
         old[source] = pos[source];
         pos[source] = goal;
-        stamp[source] = generation;
+        stamp[source] = g;
         sponsor[source] = source as u32;
-        ws.moved.push(source as u32);
-        let (s0, s1) = (lat.adj_start[source] as usize, lat.adj_start[source + 1] as usize);
-        for k in s0..s1 {
-            let link = lat.adj_link[k];
-            if self.link_state[(link & !SIDE_B) as usize] == INTACT {
-                ws.queue.push([lat.adj_nbr[k], link, source as u32]);
-            }
-        }
+        moved.push(source as u32);
 
         let mut head = 0;
         let mut blocked = false;
-        while head < ws.queue.len() {
-            let [c, link, s] = ws.queue[head];
+        'reaction: while let Some(&s) = moved.get(head) {
             head += 1;
-            let c = c as usize;
-            if stamp[c] == generation {
-                continue;
-            }
-            let l = (link & !SIDE_B) as usize;
-            let [lo, hi] = self.link_box[l];
-            let ps = pos[s as usize];
-            // The sponsor is the link's `a` end unless the entry was taken from `b`'s list.
-            let (blo, bhi) = if link & SIDE_B == 0 {
-                ([ps[0] + lo[0], ps[1] + lo[1], ps[2] + lo[2]], [ps[0] + hi[0], ps[1] + hi[1], ps[2] + hi[2]])
-            } else {
-                ([ps[0] - hi[0], ps[1] - hi[1], ps[2] - hi[2]], [ps[0] - lo[0], ps[1] - lo[1], ps[2] - lo[2]])
-            };
-            let pc = pos[c];
-            let q = clamp_to(pc, blo, bhi, mask);
-            if q == pc {
-                continue;
-            }
-            if self.flags[c] & FIXED != 0 {
-                // A fixed element may be left where it is only if the move does not make its link worse
-                // than it was before this deformation (relaxation can leave links slightly outside).
-                let po = old[s as usize];
-                let shift = [po[0] - ps[0], po[1] - ps[1], po[2] - ps[2]];
-                let before = clamp_to(
-                    pc,
-                    [blo[0] + shift[0], blo[1] + shift[1], blo[2] + shift[2]],
-                    [bhi[0] + shift[0], bhi[1] + shift[1], bhi[2] + shift[2]],
-                    mask,
-                );
-                let scale = (hi[0] - lo[0]).abs().max((hi[1] - lo[1]).abs()).max((hi[2] - lo[2]).abs())
-                    + (lo[0].abs() + lo[1].abs() + lo[2].abs());
-                let tol = 1e-5 * scale;
-                if dist2(q, pc).sqrt() > dist2(before, pc).sqrt() + tol {
-                    blocked = true;
-                    break;
+            let s = s as usize;
+            let ps = pos[s];
+            let row = s * width..(s + 1) * width;
+            for (t, (&c, &class)) in nbrs[row.clone()].iter().zip(&slot_class[row]).enumerate() {
+                let c = c as usize;
+                // Stamped: moved already (padding slots point at `s` itself).
+                if stamp[c] == g {
+                    continue;
                 }
-                continue;
-            }
-            old[c] = pc;
-            pos[c] = q;
-            stamp[c] = generation;
-            sponsor[c] = s;
-            ws.moved.push(c as u32);
-            let (s0, s1) = (lat.adj_start[c] as usize, lat.adj_start[c + 1] as usize);
-            for k in s0..s1 {
-                let n = lat.adj_nbr[k];
-                let link = lat.adj_link[k];
-                if stamp[n as usize] != generation && self.link_state[(link & !SIDE_B) as usize] == INTACT {
-                    ws.queue.push([n, link, c as u32]);
+                // The slot bounds `p[s] - p[c]`, so `p[c]` must lie in `[ps - ehi, ps - elo]`; a broken
+                // link's box is infinite and never moves `c`.
+                let [elo, ehi] = classes[class as usize].bounds;
+                let blo = [ps[0] - ehi[0], ps[1] - ehi[1], ps[2] - ehi[2]];
+                let bhi = [ps[0] - elo[0], ps[1] - elo[1], ps[2] - elo[2]];
+                let pc = pos[c];
+                let q = clamp_masked::<MASK>(pc, blo, bhi);
+                if q == pc {
+                    continue;
                 }
+                if flags[c] & FIXED != 0 {
+                    if self.lattice.fixed_blocks(
+                        &self.link_box,
+                        s,
+                        t,
+                        c,
+                        [old[s], ps, pc, q],
+                        mask_of::<MASK>(),
+                    ) {
+                        blocked = true;
+                        break 'reaction;
+                    }
+                    continue;
+                }
+                old[c] = pc;
+                pos[c] = q;
+                stamp[c] = g;
+                sponsor[c] = s as u32;
+                moved.push(c as u32);
             }
         }
         if blocked {
@@ -293,5 +305,61 @@ impl Body {
             return false;
         }
         true
+    }
+}
+
+const fn mask_of<const MASK: u8>() -> [bool; 3] {
+    [MASK & 1 != 0, MASK & 2 != 0, MASK & 4 != 0]
+}
+
+/// Clamps the coordinates selected by `MASK` into `[lo, hi]` (`lo <= hi`, all finite or infinite, no
+/// NaN): plain comparisons, which compile to single min/max instructions.
+#[inline(always)]
+fn clamp_masked<const MASK: u8>(p: [f32; 3], lo: [f32; 3], hi: [f32; 3]) -> [f32; 3] {
+    let mut q = p;
+    for k in 0..3 {
+        if MASK & (1 << k) != 0 {
+            let x = if p[k] < lo[k] { lo[k] } else { p[k] };
+            q[k] = if x > hi[k] { hi[k] } else { x };
+        }
+    }
+    q
+}
+
+impl Lattice {
+    /// Whether moving fixed element `c` to `q` (from `pc`), as demanded by its sponsor `s` (which moved
+    /// from `po` to `ps`) through the link of `s`'s adjacency entry `t`, would make that link worse than
+    /// it was before this deformation (relaxation can leave links slightly outside their boxes).
+    #[cold]
+    #[inline(never)]
+    fn fixed_blocks(
+        &self,
+        link_box: &[[[f32; 3]; 2]],
+        s: usize,
+        t: usize,
+        c: usize,
+        [po, ps, pc, q]: [[f32; 3]; 4],
+        mask: [bool; 3],
+    ) -> bool {
+        let link = self.adj_link[self.adj_start[s] as usize + t];
+        debug_assert_eq!(self.adj_nbr[self.adj_start[s] as usize + t] as usize, c);
+        let [lo, hi] = link_box[(link & !SIDE_B) as usize];
+        // The sponsor is the link's `a` end unless the entry was taken from `b`'s list.
+        let (blo, bhi) = if link & SIDE_B == 0 {
+            ([ps[0] + lo[0], ps[1] + lo[1], ps[2] + lo[2]], [ps[0] + hi[0], ps[1] + hi[1], ps[2] + hi[2]])
+        } else {
+            ([ps[0] - hi[0], ps[1] - hi[1], ps[2] - hi[2]], [ps[0] - lo[0], ps[1] - lo[1], ps[2] - lo[2]])
+        };
+        let shift = [po[0] - ps[0], po[1] - ps[1], po[2] - ps[2]];
+        let before = clamp_to(
+            pc,
+            [blo[0] + shift[0], blo[1] + shift[1], blo[2] + shift[2]],
+            [bhi[0] + shift[0], bhi[1] + shift[1], bhi[2] + shift[2]],
+            mask,
+        );
+        let scale = (hi[0] - lo[0]).abs().max((hi[1] - lo[1]).abs()).max((hi[2] - lo[2]).abs())
+            + (lo[0].abs() + lo[1].abs() + lo[2].abs());
+        let tol = 1e-5 * scale;
+        dist2(q, pc).sqrt() > dist2(before, pc).sqrt() + tol
     }
 }

@@ -10,10 +10,9 @@
 
 use std::time::{Duration, Instant};
 
-use super::body::{Body, FIXED};
+use super::body::{Body, FIXED, SlotClass};
 use super::deform::Workspace;
 use super::ids::ElementId;
-use super::lattice::SIDE_B;
 
 /// Jacobi damping factor.
 pub const OMEGA: f32 = 0.9;
@@ -91,56 +90,41 @@ impl Body {
     /// the Jacobi step scaled by a factor in `[0, 1]`, and `ω ≤ 1`).
     #[inline(always)]
     fn relaxed(&self, i: usize) -> [f32; 3] {
-        let lat = &self.lattice;
-        let (s0, s1) = (lat.adj_start[i] as usize, lat.adj_start[i + 1] as usize);
-        let mut acc = [0.0f32; 3];
-        let mut wsum = 0.0f32;
-        let mut lo = [f32::NEG_INFINITY; 3];
-        let mut hi = [f32::INFINITY; 3];
-        for k in s0..s1 {
-            let w = self.adj_w[k];
-            if w == 0.0 {
-                continue;
-            }
-            let j = lat.adj_nbr[k] as usize;
-            let link = lat.adj_link[k];
-            let (p, r) = (self.pos[j], lat.rest[j]);
-            let [blo, bhi] = self.link_box[(link & !SIDE_B) as usize];
-            for c in 0..3 {
-                acc[c] += w * (p[c] - r[c]);
-                // `i` is the link's `b` end when the entry sits in `b`'s list.
-                let (l, h) = if link & SIDE_B != 0 {
-                    (p[c] + blo[c], p[c] + bhi[c])
-                } else {
-                    (p[c] - bhi[c], p[c] - blo[c])
-                };
-                lo[c] = lo[c].max(l);
-                hi[c] = hi[c].min(h);
-            }
-            wsum += w;
-        }
-        let p = self.pos[i];
-        if wsum <= 0.0 {
-            return p;
-        }
-        let r = lat.rest[i];
-        let inv = OMEGA / wsum;
-        let mut q = p;
-        for c in 0..3 {
-            let target = p[c] + (acc[c] * inv - OMEGA * (p[c] - r[c]));
-            // Never leave the boxes further than the element already is; never step backwards.
-            q[c] = target.max(lo[c].min(p[c])).min(hi[c].max(p[c]));
-        }
-        q
+        let w = self.width;
+        let row = i * w..(i + 1) * w;
+        relaxed_row(
+            &self.pos,
+            &self.lattice.rest,
+            self.pos[i],
+            self.lattice.rest[i],
+            &self.slot_nbr[row.clone()],
+            &self.classes,
+            &self.slot_class[row],
+        )
     }
 
     fn sweep_all(&mut self, ws: &mut Workspace) -> f32 {
+        // Constant widths let the row loop unroll: 4 on sheets, 6 in volumes.
+        match self.width {
+            4 => self.sweep_all_width(ws, 4),
+            6 => self.sweep_all_width(ws, 6),
+            w => self.sweep_all_width(ws, w),
+        }
+    }
+
+    /// One Jacobi sweep over every element, streaming through the rows of the fixed-width adjacency.
+    #[inline(always)]
+    fn sweep_all_width(&mut self, ws: &mut Workspace, width: usize) -> f32 {
         let mut change = 0.0f32;
-        for i in 0..self.pos.len() {
-            let p = self.pos[i];
-            let q = if self.flags[i] & FIXED != 0 { p } else { self.relaxed(i) };
-            change = change.max((q[0] - p[0]).abs()).max((q[1] - p[1]).abs()).max((q[2] - p[2]).abs());
-            ws.next[i] = q;
+        let (pos, rest) = (&self.pos[..], &self.lattice.rest[..]);
+        let rows = self.slot_nbr.chunks_exact(width).zip(self.slot_class.chunks_exact(width));
+        let elements = pos.iter().zip(rest).zip(&self.flags).zip(&mut ws.next[..]);
+        let classes = &self.classes[..];
+        for ((nbrs, slot_class), (((&p, &r), &flags), next)) in rows.zip(elements) {
+            let q =
+                if flags & FIXED != 0 { p } else { relaxed_row(pos, rest, p, r, nbrs, classes, slot_class) };
+            change = max_change(change, p, q);
+            *next = q;
         }
         std::mem::swap(&mut self.pos, &mut ws.next);
         change
@@ -166,7 +150,7 @@ impl Body {
                 }
                 let p = self.pos[i];
                 let q = if self.flags[i] & FIXED != 0 { p } else { self.relaxed(i) };
-                change = change.max((q[0] - p[0]).abs()).max((q[1] - p[1]).abs()).max((q[2] - p[2]).abs());
+                change = max_change(change, p, q);
                 ws.next[i] = q;
             }
             for &e in elements {
@@ -195,7 +179,7 @@ impl Body {
             let i = i as usize;
             let p = self.pos[i];
             let q = if self.flags[i] & FIXED != 0 { p } else { self.relaxed(i) };
-            change = change.max((q[0] - p[0]).abs()).max((q[1] - p[1]).abs()).max((q[2] - p[2]).abs());
+            change = max_change(change, p, q);
             ws.next[i] = q;
         }
         for &i in &ws.moved {
@@ -203,4 +187,62 @@ impl Body {
         }
         change
     }
+}
+
+/// `change` raised to the largest coordinate move from `p` to `q` (all finite).
+#[inline(always)]
+fn max_change(change: f32, p: [f32; 3], q: [f32; 3]) -> f32 {
+    let mut m = change;
+    for c in 0..3 {
+        let d = (q[c] - p[c]).abs();
+        m = if d > m { d } else { m };
+    }
+    m
+}
+
+/// The relaxed position of an element at `p` (rest `r`) whose adjacency row is `nbrs` and
+/// `slot_class` (boxes on `p[owner] - p[nbr]` and weights in `classes`). Broken links and padding slots have weight 0 and an infinite
+/// box: they add exactly nothing (the sums start at +0, so adding ±0 leaves them bit for bit).
+#[inline(always)]
+fn relaxed_row(
+    pos: &[[f32; 3]],
+    rest: &[[f32; 3]],
+    p: [f32; 3],
+    r: [f32; 3],
+    nbrs: &[u32],
+    classes: &[SlotClass],
+    slot_class: &[u32],
+) -> [f32; 3] {
+    let rest = &rest[..pos.len()];
+    let mut acc = [0.0f32; 3];
+    let mut wsum = 0.0f32;
+    let mut lo = [f32::NEG_INFINITY; 3];
+    let mut hi = [f32::INFINITY; 3];
+    for (&j, &class) in nbrs.iter().zip(slot_class) {
+        let SlotClass { bounds: [blo, bhi], w } = classes[class as usize];
+        let j = j as usize;
+        let (pj, rj) = (pos[j], rest[j]);
+        for c in 0..3 {
+            acc[c] += w * (pj[c] - rj[c]);
+            // The slot bounds `p[i] - p[j]`: `p[i]` must lie in `[pj + blo, pj + bhi]`.
+            let (l, h) = (pj[c] + blo[c], pj[c] + bhi[c]);
+            lo[c] = if l > lo[c] { l } else { lo[c] };
+            hi[c] = if h < hi[c] { h } else { hi[c] };
+        }
+        wsum += w;
+    }
+    if wsum <= 0.0 {
+        return p;
+    }
+    let inv = OMEGA / wsum;
+    let mut q = p;
+    for c in 0..3 {
+        let target = p[c] + (acc[c] * inv - OMEGA * (p[c] - r[c]));
+        // Never leave the boxes further than the element already is; never step backwards.
+        let floor = if lo[c] < p[c] { lo[c] } else { p[c] };
+        let ceil = if hi[c] > p[c] { hi[c] } else { p[c] };
+        let t = if target > floor { target } else { floor };
+        q[c] = if t < ceil { t } else { ceil };
+    }
+    q
 }
