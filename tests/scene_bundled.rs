@@ -39,7 +39,13 @@ fn every_bundled_script_loads_and_fits_its_scene() {
     for f in files {
         let script = Script::load(&f).unwrap_or_else(|e| panic!("{e}"));
         assert!(script.duration_steps() > 0, "{}", f.display());
-        let scene_path = scenes_dir().join(f.file_name().expect("file name"));
+        // `NAME.ron` goes with scene `NAME.ron`; variants `NAME_something.ron` with it too.
+        let mut scene_path = scenes_dir().join(f.file_name().expect("file name"));
+        if !scene_path.exists() {
+            let stem = f.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
+            let base = stem.split('_').next().unwrap_or(stem);
+            scene_path = scenes_dir().join(format!("{base}.ron"));
+        }
         let scene = Scene::load(&scene_path).unwrap_or_else(|e| panic!("{e}"));
         script.check_against(&scene).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
         let text = script.to_ron_string().expect("serializes");
