@@ -60,14 +60,25 @@ pub struct RelaxReport {
 impl Body {
     /// Relaxes the body within `budget`. Pinned and held elements stay where they are.
     pub fn relax(&mut self, ws: &mut Workspace, budget: RelaxBudget, region: RelaxRegion) -> RelaxReport {
+        self.within_budget(ws, budget, |body, ws| match region {
+            RelaxRegion::All => body.sweep_all(ws),
+            RelaxRegion::Moved => body.sweep_moved(ws),
+        })
+    }
+
+    /// Runs `sweep` (which returns the largest move of the sweep) until the budget is spent or the
+    /// moves fall to the tolerance.
+    fn within_budget(
+        &mut self,
+        ws: &mut Workspace,
+        budget: RelaxBudget,
+        mut sweep: impl FnMut(&mut Body, &mut Workspace) -> f32,
+    ) -> RelaxReport {
         ws.fit(self);
         let started = budget.max_time.map(|_| Instant::now());
         let mut report = RelaxReport::default();
         while report.sweeps < budget.max_sweeps {
-            let change = match region {
-                RelaxRegion::All => self.sweep_all(ws),
-                RelaxRegion::Moved => self.sweep_moved(ws),
-            };
+            let change = sweep(self, ws);
             report.sweeps += 1;
             report.last_change = change;
             if change <= budget.tolerance {
@@ -138,39 +149,25 @@ impl Body {
         budget: RelaxBudget,
         elements: &[ElementId],
     ) -> RelaxReport {
-        ws.fit(self);
-        let started = budget.max_time.map(|_| Instant::now());
-        let mut report = RelaxReport::default();
-        while report.sweeps < budget.max_sweeps {
+        self.within_budget(ws, budget, |body, ws| {
             let mut change = 0.0f32;
             for &e in elements {
                 let i = e.index();
-                if i >= self.pos.len() {
+                if i >= body.pos.len() {
                     continue;
                 }
-                let p = self.pos[i];
-                let q = if self.flags[i] & FIXED != 0 { p } else { self.relaxed(i) };
+                let p = body.pos[i];
+                let q = if body.flags[i] & FIXED != 0 { p } else { body.relaxed(i) };
                 change = max_change(change, p, q);
                 ws.next[i] = q;
             }
             for &e in elements {
                 if let Some(q) = ws.next.get(e.index()) {
-                    self.pos[e.index()] = *q;
+                    body.pos[e.index()] = *q;
                 }
             }
-            report.sweeps += 1;
-            report.last_change = change;
-            if change <= budget.tolerance {
-                report.converged = true;
-                break;
-            }
-            if let (Some(t0), Some(limit)) = (started, budget.max_time)
-                && t0.elapsed() >= limit
-            {
-                break;
-            }
-        }
-        report
+            change
+        })
     }
 
     fn sweep_moved(&mut self, ws: &mut Workspace) -> f32 {

@@ -314,28 +314,18 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
         du.min(dv)
     };
     let n = body.element_count();
-    let ws = Workspace::new(&body);
-    Ok(Tissue {
-        ws,
-        geometry: Geometry::Surface(s.surface),
-        layers,
-        link_kind: kinds,
-        rest_len,
-        sheet: if nl == 2 { sheet as u32 } else { 0 },
-        min_gap: connective.as_ref().map(|c| c.min_gap).unwrap_or(0.0),
-        active: Vec::with_capacity(n),
-        in_active: vec![false; n],
-        cut_queue: Vec::new(),
-        events: Vec::new(),
-        topology_version: 0,
-        damage: Damage::default(),
-        max_stretch: 1.0,
-        spacing,
+    Ok(Tissue::assemble(
         body,
-        fem: None,
-        notice: None,
-        on_surface: vec![true; n],
-    })
+        Geometry::Surface(s.surface),
+        layers,
+        kinds,
+        rest_len,
+        if nl == 2 { sheet as u32 } else { 0 },
+        connective.as_ref().map(|c| c.min_gap).unwrap_or(0.0),
+        spacing,
+        None,
+        vec![true; n],
+    ))
 }
 
 fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
@@ -427,7 +417,6 @@ fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
         material: crate::chainmail::MaterialId(0),
         triangles,
     }];
-    let ws = Workspace::new(&body);
     let spacing = (0..3).map(|k| s.size[k] / (dims[k] - 1) as f32).fold(f32::MAX, f32::min);
     let fem = match &s.fem {
         None => None,
@@ -452,27 +441,58 @@ fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
             Some(Box::new(drive))
         }
     };
-    Ok(Tissue {
-        ws,
-        geometry: Geometry::Volume,
-        layers,
-        link_kind: vec![LinkKind::Layer(0); m],
-        rest_len,
-        sheet: 0,
-        min_gap: 0.0,
-        active: Vec::with_capacity(n),
-        in_active: vec![false; n],
-        cut_queue: Vec::new(),
-        events: Vec::new(),
-        topology_version: 0,
-        damage: Damage::default(),
-        max_stretch: 1.0,
-        spacing,
+    Ok(Tissue::assemble(
         body,
+        Geometry::Volume,
+        layers,
+        vec![LinkKind::Layer(0); m],
+        rest_len,
+        0,
+        0.0,
+        spacing,
         fem,
-        notice: None,
         on_surface,
-    })
+    ))
+}
+
+impl Tissue {
+    /// A tissue at rest around a built body, with empty scratch and counters.
+    #[allow(clippy::too_many_arguments)]
+    fn assemble(
+        body: Body,
+        geometry: Geometry,
+        layers: Vec<Layer>,
+        link_kind: Vec<LinkKind>,
+        rest_len: Vec<f32>,
+        sheet: u32,
+        min_gap: f32,
+        spacing: f32,
+        fem: Option<Box<super::FemDrive>>,
+        on_surface: Vec<bool>,
+    ) -> Self {
+        let n = body.element_count();
+        Tissue {
+            ws: Workspace::new(&body),
+            geometry,
+            layers,
+            link_kind,
+            rest_len,
+            sheet,
+            min_gap,
+            active: Vec::with_capacity(n),
+            in_active: vec![false; n],
+            cut_queue: Vec::new(),
+            events: Vec::new(),
+            topology_version: 0,
+            damage: Damage::default(),
+            max_stretch: 1.0,
+            spacing,
+            body,
+            fem,
+            notice: None,
+            on_surface,
+        }
+    }
 }
 
 /// A range of `u` and a range of `v`, as fractions.
