@@ -15,6 +15,9 @@ use crate::ui::{FrameSample, ReportSummary, Timing};
 
 /// Most steps a frame may run: at 1000 Hz, a frame slower than this many milliseconds falls behind.
 const MAX_STEPS_PER_FRAME: u32 = 100;
+/// Most wall time a frame spends stepping: past it the frame draws and the rest of the steps are
+/// dropped (the simulation falls behind real time instead of the window freezing).
+const SIM_BUDGET_PER_FRAME: Duration = Duration::from_millis(30);
 /// How often the scene file's modification time is checked.
 const WATCH_EVERY: Duration = Duration::from_millis(500);
 
@@ -103,6 +106,7 @@ pub struct Session {
     pub scene_error: Option<String>,
     message: Option<(String, Instant)>,
     started: Instant,
+    dropped: bool,
 }
 
 /// `recordings/2026-11-22_05-30-12.ron` under the current folder (a counter is added if it exists).
@@ -178,6 +182,7 @@ impl Session {
             scene_error: None,
             message: None,
             started: Instant::now(),
+            dropped: false,
         })
     }
 
@@ -331,7 +336,12 @@ impl Session {
                 self.world.push(c);
             }
         }
+        self.dropped = false;
         while steps > 0 {
+            if t.elapsed() > SIM_BUDGET_PER_FRAME {
+                self.dropped = true;
+                break;
+            }
             steps -= 1;
             if let Driver::Replay { player, .. } = &mut self.driver {
                 player.feed(&mut self.world);
@@ -371,7 +381,10 @@ impl Session {
         let rate = self.world.config().rate_hz as f32;
         let warm = self.started.elapsed() > Duration::from_secs(2);
         let running = !self.replay_finished();
-        running && (self.clock.is_behind() || (warm && self.timing.steps_per_second() < 0.9 * rate))
+        running
+            && (self.clock.is_behind()
+                || self.dropped
+                || (warm && self.timing.steps_per_second() < 0.9 * rate))
     }
 
     /// Whether a replay has played everything.

@@ -6,7 +6,8 @@ use super::{Action, Frame, View};
 pub const BINDINGS: &[(&str, &str)] = &[
     ("1 / 2 / 3", "forceps / scalpel / probe (the scene's instrument order)"),
     ("left drag", "use the instrument: grasp and pull / cut / push"),
-    ("wheel + left held", "forceps: insert along the view; probe: push deeper"),
+    ("wheel + left held", "forceps: move along the view (up: towards you); probe: push (down: deeper)"),
+    ("Ctrl + release left", "forceps stay clamped on the tissue (take another instrument, come back with 1)"),
     ("U / B / L", "scalpel depth: upper layer / between layers / lower layer"),
     ("[ / ]", "roll the instrument by 15°"),
     ("right drag", "orbit the camera"),
