@@ -615,3 +615,29 @@ impl ApplicationHandler for App {
         self.finish();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_map_to_the_actions_the_help_lists() {
+        let instruments = [InstrumentKind::Forceps, InstrumentKind::Scalpel, InstrumentKind::Probe];
+        let key = |s: &str| Key::Character(s.into());
+        assert_eq!(key_action(&key("2"), &instruments), Some(Action::Select(InstrumentKind::Scalpel)));
+        assert_eq!(key_action(&key("3"), &instruments[..2]), None);
+        assert_eq!(key_action(&key("b"), &instruments), Some(Action::SetDepth(CutDepth::Between)));
+        assert_eq!(key_action(&key("?"), &instruments), Some(Action::ToggleHelp));
+        assert_eq!(key_action(&Key::Named(NamedKey::F12), &instruments), Some(Action::Screenshot));
+        assert_eq!(key_action(&Key::Named(NamedKey::F5), &instruments), Some(Action::Reload));
+    }
+
+    #[test]
+    fn a_single_window_splits_its_view_area_in_halves() {
+        let area = egui::Rect::from_min_max(egui::pos2(100.0, 20.0), egui::pos2(900.0, 620.0));
+        let (left, right) = split(area, true);
+        assert_eq!(left.max.x, 500.0);
+        assert_eq!(right.map(|r| r.min.x), Some(500.0));
+        assert_eq!(split(area, false), (area, None));
+    }
+}
