@@ -112,6 +112,7 @@ struct State {
     hand: Hand,
     modifiers: ModifiersState,
     last_frame: Instant,
+    opened: Instant,
     frames: u64,
     announced: bool,
     replay_done: bool,
@@ -137,6 +138,16 @@ impl App {
     fn finish(&mut self) {
         if !self.finished {
             self.finished = true;
+            if let Some(state) = &self.state {
+                let seconds = state.opened.elapsed().as_secs_f64();
+                println!(
+                    "dissect: {} frames in {seconds:.1} s ({:.1} fps), {} steps ({:.0} steps/s)",
+                    state.frames,
+                    state.frames as f64 / seconds.max(1e-9),
+                    self.session.world.step_count(),
+                    self.session.world.step_count() as f64 / seconds.max(1e-9)
+                );
+            }
             self.session.finish();
         }
     }
@@ -207,6 +218,7 @@ impl App {
             hand,
             modifiers: ModifiersState::empty(),
             last_frame: Instant::now(),
+            opened: Instant::now(),
             frames: 0,
             announced: false,
             replay_done: false,
