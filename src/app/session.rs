@@ -300,9 +300,12 @@ impl Session {
     }
 
     /// Gathers a command for the next step (ignored while replaying). Consecutive moves collapse into
-    /// the last one.
+    /// the last one; a move to where the instrument already is, with nothing else pending, is dropped.
     pub fn queue(&mut self, command: Command) {
         if let Driver::Live { pending, .. } = &mut self.driver {
+            if pending.is_empty() && command == Command::MoveTo(self.world.instrument().target) {
+                return;
+            }
             if let (Command::MoveTo(_), Some(Command::MoveTo(last))) = (&command, pending.last_mut()) {
                 if let Command::MoveTo(p) = command {
                     *last = p;

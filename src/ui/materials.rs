@@ -29,6 +29,7 @@ fn slider(ui: &mut egui::Ui, label: &str, value: &mut f32, range: std::ops::Rang
 impl View for MaterialPanel {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &Frame<'_>, actions: &mut Vec<Action>) {
         let body = frame.world.tissue().body();
+        ui.label("Limits relative to rest length: stretch ≤ max, compress ≥ min, shear ≤ max.");
         ui.add_enabled_ui(frame.input_enabled, |ui| {
             for (name, id) in named_materials(frame) {
                 let Some(current) = body.material(id).copied() else { continue };
@@ -37,14 +38,14 @@ impl View for MaterialPanel {
                 let mut changed = false;
                 match &mut m.limits {
                     Limits::Relative { max_stretch, min_compress, max_shear } => {
-                        changed |= slider(ui, "max stretch", max_stretch, 1.0..=3.0);
-                        changed |= slider(ui, "min compress", min_compress, 0.1..=1.0);
-                        changed |= slider(ui, "max shear", max_shear, 0.0..=1.5);
+                        changed |= slider(ui, "stretch ≤", max_stretch, 1.0..=3.0);
+                        changed |= slider(ui, "compress ≥", min_compress, 0.1..=1.0);
+                        changed |= slider(ui, "shear ≤", max_shear, 0.0..=1.5);
                     }
                     Limits::Absolute { min_dist, max_dist, max_shear } => {
-                        changed |= slider(ui, "min dist (m)", min_dist, 0.0..=0.01);
-                        changed |= slider(ui, "max dist (m)", max_dist, 0.0..=0.02);
-                        changed |= slider(ui, "max shear (m)", max_shear, 0.0..=0.01);
+                        changed |= slider(ui, "dist ≥ (m)", min_dist, 0.0..=0.01);
+                        changed |= slider(ui, "dist ≤ (m)", max_dist, 0.0..=0.02);
+                        changed |= slider(ui, "shear ≤ (m)", max_shear, 0.0..=0.01);
                     }
                 }
                 changed |= slider(ui, "stiffness", &mut m.stiffness, 0.05..=5.0);
