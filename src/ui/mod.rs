@@ -143,13 +143,17 @@ impl TraineeUi {
         egui::Panel::left("instrument-bar").resizable(false).exact_size(170.0).show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| self.instruments.ui(ui, frame, actions));
         });
-        egui::Panel::right("trainee-side").resizable(true).default_size(250.0).max_size(420.0).show(
+        egui::Panel::right("trainee-side").resizable(true).default_size(250.0).max_size(290.0).show(
             ui,
             |ui| {
                 ui.spacing_mut().slider_width = 90.0;
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    ui.collapsing("Assessment", |ui| self.assessment.ui(ui, frame, actions));
-                    ui.collapsing("Simulation", |ui| self.simulation.ui(ui, frame, actions));
+                    egui::CollapsingHeader::new("Assessment")
+                        .default_open(true)
+                        .show(ui, |ui| self.assessment.ui(ui, frame, actions));
+                    egui::CollapsingHeader::new("Simulation")
+                        .default_open(true)
+                        .show(ui, |ui| self.simulation.ui(ui, frame, actions));
                     ui.collapsing("Materials", |ui| self.materials.ui(ui, frame, actions));
                     if with_monitor {
                         ui.collapsing("Monitor", |ui| self.monitor.ui(ui, frame, actions));

@@ -11,7 +11,7 @@ pub struct SimulationPanel;
 const FRAME_COLOR: egui::Color32 = egui::Color32::from_rgb(120, 200, 255);
 const SIM_COLOR: egui::Color32 = egui::Color32::from_rgb(255, 180, 90);
 
-/// Draws frame time and simulation time per frame (milliseconds) over the last [`WINDOW_S`] seconds.
+/// Draws frame time and simulation time per frame (milliseconds) over the last six seconds.
 pub fn time_plot(ui: &mut egui::Ui, frame: &Frame<'_>) {
     let samples = frame.timing.samples();
     let width = ui.available_width().max(120.0);
@@ -23,8 +23,9 @@ pub fn time_plot(ui: &mut egui::Ui, frame: &Frame<'_>) {
     let x = |t: f64| rect.right() - ((last.t - t) / WINDOW_S) as f32 * rect.width();
     let y = |v: f32| rect.bottom() - (v / top).clamp(0.0, 1.0) * rect.height();
     // Reference lines at 16.7 ms (60 fps) and 33.3 ms (30 fps).
+    let crowded = y(1000.0 / 60.0) - y(1000.0 / 30.0) < 12.0;
     for (ms, label) in [(1000.0 / 60.0, "60 fps"), (1000.0 / 30.0, "30 fps")] {
-        if ms < top {
+        if ms < top && !(crowded && ms < 20.0) {
             painter.hline(rect.x_range(), y(ms), egui::Stroke::new(1.0, egui::Color32::from_gray(60)));
             painter.text(
                 egui::pos2(rect.left() + 2.0, y(ms)),

@@ -27,7 +27,7 @@ pub struct Timing {
 }
 
 impl Timing {
-    /// Adds a frame and forgets what is older than [`WINDOW_S`].
+    /// Adds a frame and forgets what is older than the plotted window (six seconds).
     pub fn push(&mut self, sample: FrameSample) {
         self.samples.push_back(sample);
         while self.samples.front().is_some_and(|s| sample.t - s.t > WINDOW_S) {
