@@ -23,9 +23,13 @@
 //! | [`runner`] | the script player, run metrics and final state (headless runs) | scene, simulation, training |
 //! | [`training`] | exercise goals, live assessment and score, session report and plot | tissue, simulation |
 //! | [`render`] | wgpu device, scene pipelines and buffers, orbit camera and picking rays, headless PNG capture | wgpu, glam, bytemuck, image, `simulation` (snapshot types only); never winit or egui |
+//! | [`ui`] | the egui panels, one type per panel (`View`), and the actions they ask for | egui, `World`'s public API, scene, training (types); never winit or wgpu |
+//! | [`app`] | the two windows, the event loop, input to instrument commands, recording and replay, hot reload | winit (only here), egui-winit, egui-wgpu, ui, render, and the simulation side's public API |
 //!
 //! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
 //! `training`, `fem`) never imports wgpu, winit or egui.
+
+pub mod app;
 pub mod chainmail;
 pub mod fem;
 pub mod instrument;
@@ -36,3 +40,4 @@ pub mod simulation;
 pub mod surface;
 pub mod tissue;
 pub mod training;
+pub mod ui;

@@ -14,11 +14,37 @@ use dissect::scene::{Scene, Script};
     name = "dissect",
     version,
     about,
-    after_help = "Examples:\n  dissect                                 open the trainer with the default scene\n  dissect check scenes/*.ron              check scene files\n  dissect run scenes/meninges.ron --script scenes/scripts/meninges.ron --out out/\n  dissect replay out/recording.ron\n\nScene and script formats: scenes/README.md"
+    after_help = "Examples:\n  dissect                                 open the trainer with the default scene\n  dissect scenes/cylinder.ron --single-window   both views in one window; the file is hot-reloaded\n  dissect check scenes/*.ron              check scene files\n  dissect run scenes/meninges.ron --script scenes/scripts/meninges.ron --out out/\n  dissect replay out/recording.ron\n\nScene and script formats: scenes/README.md"
 )]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// The scene to open (RON); default: the built-in meninges exercise. A scene file is watched and
+    /// reloaded when it changes.
+    #[arg(value_name = "SCENE")]
+    scene: Option<PathBuf>,
+    #[command(flatten)]
+    window: WindowArgs,
+    /// Play a script (or recording) instead of taking input, on SCENE (for demonstrations).
+    #[arg(long, value_name = "SCRIPT", hide = true)]
+    demo_script: Option<PathBuf>,
+}
+
+/// Options of the trainer's windows.
+#[derive(clap::Args, Debug, Clone)]
+struct WindowArgs {
+    /// Show the trainee's and the observers' views side by side in one window.
+    #[arg(long)]
+    single_window: bool,
+    /// Exit after N frames (for smoke tests).
+    #[arg(long, value_name = "N")]
+    frames: Option<u64>,
+    /// Record the session here (default: recordings/<date>_<time>.ron).
+    #[arg(long, value_name = "PATH")]
+    record: Option<PathBuf>,
+    /// Where screenshots (F12 / P) go (default: screenshots/).
+    #[arg(long, value_name = "DIR")]
+    screenshot_dir: Option<PathBuf>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -57,12 +83,14 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         record: Option<PathBuf>,
     },
-    /// Replay a recorded session.
-    #[command(after_help = "Example:\n  dissect replay out/meninges/recording.ron")]
+    /// Replay a recorded session in the trainer's windows (input disabled, cameras free).
+    #[command(after_help = "Example:\n  dissect replay recordings/2026-11-22_10-00-00.ron")]
     Replay {
         /// The recording file.
         #[arg(value_name = "FILE")]
         file: PathBuf,
+        #[command(flatten)]
+        window: WindowArgs,
     },
     /// Compare ChainMail with the linear finite-element reference on the same block: surface
     /// displacement error (RMS, relative to the imposed displacement) and time per step of each.
@@ -93,20 +121,17 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         None => {
-            println!(
-                "dissect: the trainer window is not wired yet; try `dissect check scenes/meninges.ron`."
-            );
-            Ok(ExitCode::SUCCESS)
+            let source = match cli.demo_script {
+                Some(script) => dissect::app::Source::Demo(script),
+                None => dissect::app::Source::Live,
+            };
+            open_app(cli.scene, cli.window, source)
         }
         Some(Command::Check { scenes, script }) => Ok(check(&scenes, script)),
         Some(Command::Run { scene, script, out, steps, record }) => {
             run_headless(&scene, &script, &out, steps, record.as_deref())
         }
-        Some(Command::Replay { file }) => {
-            let _ = file;
-            println!("dissect replay: not yet wired");
-            Ok(ExitCode::SUCCESS)
-        }
+        Some(Command::Replay { file, window }) => open_app(None, window, dissect::app::Source::Replay(file)),
         Some(Command::Compare { nodes, json }) => {
             let cfg = dissect::fem::CompareConfig { dims: [nodes; 3], ..Default::default() };
             match dissect::fem::compare(&cfg) {
@@ -123,6 +148,29 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                     Ok(ExitCode::FAILURE)
                 }
             }
+        }
+    }
+}
+
+/// Opens the trainer's windows.
+fn open_app(
+    scene: Option<PathBuf>,
+    window: WindowArgs,
+    source: dissect::app::Source,
+) -> anyhow::Result<ExitCode> {
+    let options = dissect::app::AppOptions {
+        scene,
+        single_window: window.single_window,
+        frames: window.frames,
+        record: window.record,
+        screenshot_dir: window.screenshot_dir,
+        source,
+    };
+    match dissect::app::run(options) {
+        Ok(()) => Ok(ExitCode::SUCCESS),
+        Err(e) => {
+            eprintln!("dissect: {e}");
+            Ok(ExitCode::FAILURE)
         }
     }
 }

@@ -10,7 +10,7 @@ pub use pick::{Hit, Picker};
 
 use serde::{Deserialize, Serialize};
 
-use crate::chainmail::ElementId;
+use crate::chainmail::{ElementId, Material, MaterialId};
 use crate::simulation::{InstrumentKind, InstrumentPose};
 use crate::tissue::CutDepth;
 
@@ -97,4 +97,8 @@ pub enum Command {
     Roll(f32),
     /// Point the instrument: unit vector from the tip to the handle.
     SetAxis([f32; 3]),
+    /// Retune a material of the tissue live (a slider), so that recordings replay it.
+    SetMaterial(MaterialId, Material),
+    /// Change the most relaxation sweeps per step.
+    SetRelaxSweeps(u32),
 }

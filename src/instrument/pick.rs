@@ -50,18 +50,12 @@ impl Picker {
             let p = ray.point_at(hit.time_of_impact);
             let point = [p.x, p.y, p.z];
             let layer = snapshot.layers.get(li)?;
-            let tri = match hit.feature {
-                parry3d::shape::FeatureId::Face(f) => {
-                    layer.triangles.get(f as usize % layer.triangles.len().max(1))
-                }
-                _ => None,
-            };
-            let vertex = tri
-                .and_then(|t| {
-                    t.iter().copied().min_by(|&a, &b| {
-                        dist2(layer.positions[a as usize], point)
-                            .total_cmp(&dist2(layer.positions[b as usize], point))
-                    })
+            // The vertex nearest the hit point (the face id of a hit is not an index into our
+            // triangle list once parry has built its tree, so it is not used).
+            let vertex = (0..layer.positions.len() as u32)
+                .min_by(|&a, &b| {
+                    dist2(layer.positions[a as usize], point)
+                        .total_cmp(&dist2(layer.positions[b as usize], point))
                 })
                 .unwrap_or(0);
             best = Some(Hit { point, layer: li, vertex, distance: hit.time_of_impact });

@@ -282,6 +282,12 @@ impl World {
                     self.instrument.roll = r;
                 }
             }
+            Command::SetMaterial(id, m) => {
+                if let Err(e) = self.tissue.body_mut().set_material(id, m) {
+                    self.tissue.notice = Some(format!("material refused: {e}"));
+                }
+            }
+            Command::SetRelaxSweeps(n) => self.config.relax.max_sweeps = n,
             Command::SetAxis(a) => {
                 let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
                 if l.is_finite() && l > 0.0 {

@@ -1,0 +1,655 @@
+//! The desktop trainer: two windows (the trainee's and the observers') from one winit event loop, one
+//! GPU device and one scene renderer, a fixed-step simulation driven by the trainee's mouse and keys
+//! (recorded) or by a recording (replayed), egui panels, screenshots and scene hot reload.
+//!
+//! The only module that imports winit. It may import `ui`, `render`, `simulation`, `scene`, `runner`,
+//! `training` and `instrument`, and reaches the engine only through [`World`](crate::simulation::World)'s
+//! public API and the snapshot.
+
+mod input;
+mod session;
+mod window;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::Vec2;
+use winit::application::ApplicationHandler;
+use winit::dpi::{PhysicalPosition, PhysicalSize};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{Key, ModifiersState, NamedKey};
+use winit::window::{Window, WindowId};
+
+use crate::instrument::Command;
+use crate::render::{Gpu, OrbitCamera, SceneRenderer, Style, render_to_image, save_png};
+use crate::simulation::InstrumentKind;
+use crate::tissue::CutDepth;
+use crate::ui::{Action, Frame, ObserverUi, TraineeUi};
+use input::{CameraRig, Hand};
+use session::Session;
+pub use session::default_recording_path;
+use window::ViewWindow;
+
+/// Title of the trainee's window (scripts look for it).
+pub const TRAINEE_TITLE: &str = "dissect — trainee";
+/// Title of the observers' window.
+pub const OBSERVER_TITLE: &str = "dissect — observer";
+/// Printed once the first frame of every window has been presented.
+pub const FIRST_FRAME_LINE: &str = "dissect: first frame drawn";
+
+/// What the app fails with.
+#[derive(Debug, thiserror::Error)]
+pub enum AppError {
+    /// The scene or recording cannot be read or built (the message names the file).
+    #[error("{0}")]
+    Scene(String),
+    /// No window or event loop (no display?).
+    #[error("cannot open a window: {0}")]
+    Window(String),
+    /// The GPU refused something.
+    #[error("graphics: {0}")]
+    Gpu(String),
+}
+
+/// Where the world's commands come from.
+#[derive(Clone, Debug)]
+pub enum Source {
+    /// The trainee's mouse and keys, recorded.
+    Live,
+    /// A recording, played with input disabled.
+    Replay(PathBuf),
+    /// A script played like a recording (for demonstrations and screenshots).
+    Demo(PathBuf),
+}
+
+/// How the app is opened.
+#[derive(Clone, Debug)]
+pub struct AppOptions {
+    /// The scene file; `None` for the built-in scene (then no hot reload).
+    pub scene: Option<PathBuf>,
+    /// Both views side by side in one window.
+    pub single_window: bool,
+    /// Exit after this many frames (smoke tests).
+    pub frames: Option<u64>,
+    /// Where the recording goes (default: `recordings/<date>_<time>.ron`).
+    pub record: Option<PathBuf>,
+    /// Where screenshots go (default: `screenshots/`).
+    pub screenshot_dir: Option<PathBuf>,
+    /// Live, replay or demo.
+    pub source: Source,
+}
+
+/// Opens the windows and runs until the trainee's window is closed (or `frames` have been drawn).
+pub fn run(options: AppOptions) -> Result<(), AppError> {
+    let session = match &options.source {
+        Source::Live => Session::live(
+            options.scene.as_deref(),
+            options.record.clone().unwrap_or_else(default_recording_path),
+        )?,
+        Source::Replay(path) => Session::replay(path)?,
+        Source::Demo(script) => Session::demo(options.scene.as_deref(), script)?,
+    };
+    let event_loop = EventLoop::new().map_err(|e| AppError::Window(e.to_string()))?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut app = App { options, session, state: None, error: None, finished: false };
+    let result = event_loop.run_app(&mut app).map_err(|e| AppError::Window(e.to_string()));
+    app.finish();
+    match app.error {
+        Some(e) => Err(e),
+        None => result,
+    }
+}
+
+struct State {
+    gpu: Gpu,
+    renderer: SceneRenderer,
+    trainee: ViewWindow,
+    observer: Option<ViewWindow>,
+    trainee_ui: TraineeUi,
+    observer_ui: ObserverUi,
+    hand: Hand,
+    modifiers: ModifiersState,
+    last_frame: Instant,
+    opened: Instant,
+    frames: u64,
+    announced: bool,
+    replay_done: bool,
+    shots: u32,
+}
+
+struct App {
+    options: AppOptions,
+    session: Session,
+    state: Option<State>,
+    error: Option<AppError>,
+    finished: bool,
+}
+
+fn camera_rigs(session: &Session) -> (CameraRig, CameraRig) {
+    (
+        CameraRig::new(OrbitCamera::from_spec(&session.scene.trainee_camera())),
+        CameraRig::new(OrbitCamera::from_spec(&session.scene.observer_camera())),
+    )
+}
+
+impl App {
+    fn finish(&mut self) {
+        if !self.finished {
+            self.finished = true;
+            if let Some(state) = &self.state {
+                let seconds = state.opened.elapsed().as_secs_f64();
+                println!(
+                    "dissect: {} frames in {seconds:.1} s ({:.1} fps), {} steps ({:.0} steps/s)",
+                    state.frames,
+                    state.frames as f64 / seconds.max(1e-9),
+                    self.session.world.step_count(),
+                    self.session.world.step_count() as f64 / seconds.max(1e-9)
+                );
+            }
+            self.session.finish();
+        }
+    }
+
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<State, AppError> {
+        let screen = event_loop.primary_monitor().map(|m| m.size()).unwrap_or(PhysicalSize::new(1280, 800));
+        let (sw, sh) = (screen.width.max(800), screen.height.max(600));
+        let single = self.options.single_window;
+        let trainee_w = if single { sw } else { sw * 16 / 25 };
+        let height = sh.saturating_sub(20).max(480);
+        let create = |title: &str, w: u32, x: u32| -> Result<Arc<Window>, AppError> {
+            let attributes = Window::default_attributes()
+                .with_title(title)
+                .with_inner_size(PhysicalSize::new(w, height))
+                .with_position(PhysicalPosition::new(x as i32, 0));
+            event_loop.create_window(attributes).map(Arc::new).map_err(|e| AppError::Window(e.to_string()))
+        };
+        let trainee_window =
+            create(if single { "dissect — trainee and observer" } else { TRAINEE_TITLE }, trainee_w, 0)?;
+        let observer_window =
+            if single { None } else { Some(create(OBSERVER_TITLE, sw - trainee_w, trainee_w)?) };
+
+        let instance = Gpu::instance_for_display(Box::new(event_loop.owned_display_handle()));
+        let surface = instance
+            .create_surface(trainee_window.clone())
+            .map_err(|e| AppError::Gpu(format!("no surface: {e}")))?;
+        let gpu = pollster::block_on(Gpu::request(instance, Some(&surface)))
+            .map_err(|e| AppError::Gpu(e.to_string()))?;
+        let format = window::pick_format(&surface, &gpu)?;
+        // On a CPU rasteriser 4x MSAA costs about 3.5x a frame: draw windows single-sampled there.
+        let samples = if gpu.is_software() { 1 } else { 4 };
+        let mut renderer = SceneRenderer::with_samples(&gpu, format, Style::default(), samples);
+        renderer.update(&gpu, &self.session.snapshot).map_err(|e| AppError::Gpu(e.to_string()))?;
+        println!("dissect: {} on {} ({samples}x MSAA, {format:?})", self.session.scene.title, gpu.describe());
+
+        let (trainee_rig, observer_rig) = camera_rigs(&self.session);
+        let trainee = ViewWindow::new(
+            trainee_window,
+            surface,
+            &gpu,
+            &renderer,
+            trainee_rig,
+            single.then_some(observer_rig),
+        )?;
+        let observer = match observer_window {
+            Some(w) => {
+                let surface = gpu
+                    .instance
+                    .create_surface(w.clone())
+                    .map_err(|e| AppError::Gpu(format!("no surface: {e}")))?;
+                if !surface.get_capabilities(&gpu.adapter).formats.contains(&format) {
+                    return Err(AppError::Gpu(format!("the observer window cannot show {format:?}")));
+                }
+                Some(ViewWindow::new(w, surface, &gpu, &renderer, observer_rig, None)?)
+            }
+            None => None,
+        };
+        let mut hand = Hand::default();
+        hand.tool.kind = self.session.world.instrument().kind;
+        hand.tool.depth = self.session.world.instrument().depth;
+        Ok(State {
+            gpu,
+            renderer,
+            trainee,
+            observer,
+            trainee_ui: TraineeUi::default(),
+            observer_ui: ObserverUi::default(),
+            hand,
+            modifiers: ModifiersState::empty(),
+            last_frame: Instant::now(),
+            opened: Instant::now(),
+            frames: 0,
+            announced: false,
+            replay_done: false,
+            shots: 0,
+        })
+    }
+
+    /// One frame: input already gathered, hot reload, steps, both windows drawn, UI actions carried out.
+    fn frame(&mut self, event_loop: &ActiveEventLoop) -> Result<(), AppError> {
+        let Some(state) = self.state.as_mut() else { return Ok(()) };
+        let session = &mut self.session;
+        let now = Instant::now();
+        let dt = now - state.last_frame;
+        state.last_frame = now;
+
+        if session.poll_reload() {
+            let mut dropped = Vec::new();
+            state.hand.release(true, &mut dropped);
+            state.hand.tool.kind = session.world.instrument().kind;
+        }
+        // A held stroke follows the cursor every frame (also when only the camera or insert changed).
+        if state.hand.busy() && session.input_enabled() {
+            drive_hand(state, session, false);
+        }
+        session.advance(dt);
+        state.renderer.update(&state.gpu, &session.snapshot).map_err(|e| AppError::Gpu(e.to_string()))?;
+
+        let mut actions = Vec::new();
+        let assessment = session.assessment();
+        let status = session.status();
+        let frame = Frame {
+            world: &session.world,
+            scene: &session.scene,
+            tool: &state.hand.tool,
+            timing: &session.timing,
+            assessment: assessment.as_ref(),
+            behind: session.behind(),
+            input_enabled: session.input_enabled(),
+            status: &status,
+            scene_error: session.scene_error.as_deref(),
+            message: session.message(),
+        };
+        let replaying = !frame.input_enabled;
+
+        // The trainee's window (with the observer's view beside it in single-window mode).
+        {
+            let win = &mut state.trainee;
+            let single = win.second_camera.is_some();
+            let second = win.second_texture();
+            let raw = win.egui_state.take_egui_input(&win.window);
+            let mut area = egui::Rect::NOTHING;
+            let ui_state = &mut state.trainee_ui;
+            let output = win.egui_ctx.clone().run_ui(raw, |ui| {
+                area = ui_state.show(ui, &frame, single, &mut actions);
+                let (left, right) = split(area, single);
+                caption(ui, left, if replaying { "trainee · replay" } else { "trainee" });
+                if let (Some(right), Some(id)) = (right, second) {
+                    let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+                    ui.painter().image(id, right, uv, egui::Color32::WHITE);
+                    caption(ui, right, "observer");
+                }
+            });
+            win.set_area(area);
+            win.draw(&state.gpu, &state.renderer, output)?;
+        }
+        if let Some(win) = state.observer.as_mut() {
+            let raw = win.egui_state.take_egui_input(&win.window);
+            let mut area = egui::Rect::NOTHING;
+            let ui_state = &mut state.observer_ui;
+            let output = win.egui_ctx.clone().run_ui(raw, |ui| {
+                area = ui_state.show(ui, &frame, &mut actions);
+                caption(ui, area, "observer");
+            });
+            win.set_area(area);
+            win.draw(&state.gpu, &state.renderer, output)?;
+        }
+        state.frames += 1;
+
+        for action in actions {
+            apply(state, session, &self.options, action);
+        }
+        if !state.announced
+            && state.trainee.presented > 0
+            && state.observer.as_ref().is_none_or(|w| w.presented > 0)
+        {
+            state.announced = true;
+            println!("{FIRST_FRAME_LINE}");
+        }
+        if !state.replay_done && session.replay_finished() {
+            state.replay_done = true;
+            println!("dissect: replay finished at step {}", session.world.step_count());
+        }
+        if self.options.frames.is_some_and(|n| state.frames >= n) {
+            event_loop.exit();
+        }
+        Ok(())
+    }
+}
+
+/// The view area and, in single-window mode, its right half for the second view (points).
+fn split(area: egui::Rect, single: bool) -> (egui::Rect, Option<egui::Rect>) {
+    if !single {
+        return (area, None);
+    }
+    let mid = area.center().x;
+    (
+        egui::Rect::from_min_max(area.min, egui::pos2(mid, area.max.y)),
+        Some(egui::Rect::from_min_max(egui::pos2(mid, area.min.y), area.max)),
+    )
+}
+
+/// A small label in a view's top-left corner.
+fn caption(ui: &egui::Ui, rect: egui::Rect, text: &str) {
+    if rect.is_positive() {
+        ui.painter().text(
+            rect.min + egui::vec2(8.0, 6.0),
+            egui::Align2::LEFT_TOP,
+            text,
+            egui::FontId::proportional(14.0),
+            egui::Color32::from_white_alpha(170),
+        );
+    }
+}
+
+/// Feeds the cursor to the hand: a press (`press`) or a drag/hover in the trainee's view.
+fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
+    let camera = state.trainee.camera.camera;
+    let pointer = state.trainee.pointer;
+    session.refresh_picker();
+    let (ray, hit) = input::pick(&session.picker, &session.snapshot, &camera, &pointer);
+    let mut out = Vec::new();
+    if press {
+        state.hand.press(&session.world, &camera, ray, hit, &mut out);
+    } else {
+        state.hand.drag(&session.world, ray, hit, &mut out);
+    }
+    for c in out {
+        session.queue(c);
+    }
+}
+
+fn queue_all(session: &mut Session, commands: Vec<Command>) {
+    for c in commands {
+        session.queue(c);
+    }
+}
+
+/// Carries out what a panel or a key asked for.
+fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action: Action) {
+    let live = session.input_enabled();
+    let mut out = Vec::new();
+    match action {
+        Action::Select(kind) if live => state.hand.select(kind, &mut out),
+        Action::SetDepth(d) if live => state.hand.set_depth(d, &mut out),
+        Action::SetRoll(deg) if live => {
+            state.hand.tool.roll_deg = deg;
+            out.push(Command::Roll(deg.to_radians()));
+        }
+        Action::SetTilt(deg) if live => {
+            state.hand.tool.tilt_deg = deg;
+            out.push(Command::SetAxis(state.hand.axis(&state.trainee.camera.camera)));
+        }
+        Action::SetInsert(mm) if live => state.hand.tool.insert_mm = mm,
+        Action::SetMaterial(id, m) if live => session.set_material(id, m),
+        Action::SetSweeps(n) if live => session.set_sweeps(n),
+        Action::Reload if live && session.reload() => {
+            state.hand.release(true, &mut Vec::new());
+            state.hand.tool.kind = session.world.instrument().kind;
+        }
+        Action::Report => match session.write_report() {
+            Some(summary) => {
+                state.trainee_ui.report.summary = Some(summary);
+                state.trainee_ui.report.open = true;
+            }
+            None if session.assessor.is_none() => session.say("this scene sets no goals: nothing to report"),
+            None => {}
+        },
+        Action::Screenshot => screenshot(state, session, options),
+        Action::ToggleHelp => {
+            let open = !state.trainee_ui.help.open;
+            state.trainee_ui.help.open = open;
+            state.observer_ui.help.open = open;
+        }
+        Action::ResetCameras => {
+            state.trainee.camera.reset();
+            if let Some(c) = state.trainee.second_camera.as_mut() {
+                c.reset();
+            }
+            if let Some(w) = state.observer.as_mut() {
+                w.camera.reset();
+            }
+        }
+        _ => {}
+    }
+    queue_all(session, out);
+}
+
+/// Saves every view as `trainee-N.png` / `observer-N.png`, rendered offscreen from each view's camera
+/// at its size.
+fn screenshot(state: &mut State, session: &mut Session, options: &AppOptions) {
+    state.shots += 1;
+    let dir = options.screenshot_dir.clone().unwrap_or_else(|| PathBuf::from("screenshots"));
+    if let Err(e) = std::fs::create_dir_all(&dir) {
+        session.say(format!("cannot create {}: {e}", dir.display()));
+        return;
+    }
+    let mut views = state.trainee.shots();
+    if let Some(w) = &state.observer {
+        views.extend(w.shots());
+    }
+    let mut saved = Vec::new();
+    for ((camera, w, h), name) in views.into_iter().zip(["trainee", "observer"]) {
+        let path = dir.join(format!("{name}-{}.png", state.shots));
+        let result = render_to_image(&state.gpu, &session.snapshot, &camera, w.max(16), h.max(16))
+            .and_then(|image| save_png(&image, &path));
+        match result {
+            Ok(()) => saved.push(path.display().to_string()),
+            Err(e) => {
+                session.say(format!("screenshot failed: {e}"));
+                return;
+            }
+        }
+    }
+    println!("dissect: saved {}", saved.join(", "));
+    session.say(format!("saved {}", saved.join(", ")));
+}
+
+/// The action a key asks for, if any.
+fn key_action(key: &Key, instruments: &[InstrumentKind]) -> Option<Action> {
+    match key {
+        Key::Named(NamedKey::F1) => Some(Action::ToggleHelp),
+        Key::Named(NamedKey::F5) => Some(Action::Reload),
+        Key::Named(NamedKey::F12) => Some(Action::Screenshot),
+        Key::Named(NamedKey::Home) => Some(Action::ResetCameras),
+        Key::Character(s) => match s.as_str() {
+            "?" => Some(Action::ToggleHelp),
+            "p" | "P" => Some(Action::Screenshot),
+            "r" | "R" => Some(Action::Report),
+            "u" | "U" => Some(Action::SetDepth(CutDepth::Upper)),
+            "b" | "B" => Some(Action::SetDepth(CutDepth::Between)),
+            "l" | "L" => Some(Action::SetDepth(CutDepth::Lower)),
+            "1" | "2" | "3" => {
+                let i = s.parse::<usize>().ok()?.checked_sub(1)?;
+                instruments.get(i).copied().map(Action::Select)
+            }
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.state.is_some() {
+            return;
+        }
+        match self.open(event_loop) {
+            Ok(state) => self.state = Some(state),
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, id: WindowId, event: WindowEvent) {
+        let Some(state) = self.state.as_mut() else { return };
+        let session = &mut self.session;
+        let is_trainee = state.trainee.window.id() == id;
+        let win = if is_trainee {
+            &mut state.trainee
+        } else {
+            match state.observer.as_mut() {
+                Some(w) if w.window.id() == id => w,
+                _ => return,
+            }
+        };
+        let consumed = win.egui_state.on_window_event(&win.window, &event).consumed;
+        let live = session.input_enabled();
+        match event {
+            WindowEvent::CloseRequested => {
+                if is_trainee {
+                    event_loop.exit();
+                } else {
+                    state.observer = None;
+                }
+            }
+            WindowEvent::Resized(size) => {
+                if let Err(e) = win.resize(&state.gpu, size.width, size.height) {
+                    session.say(e.to_string());
+                }
+            }
+            WindowEvent::ModifiersChanged(m) => state.modifiers = m.state(),
+            WindowEvent::CursorMoved { position, .. } => {
+                let cursor = Vec2::new(position.x as f32, position.y as f32);
+                let delta = cursor - win.cursor;
+                win.cursor = cursor;
+                win.pointer.pos = cursor - Vec2::new(win.rect[0], win.rect[1]);
+                win.second_pointer.pos = cursor - Vec2::new(win.second_rect[0], win.second_rect[1]);
+                let shift = state.modifiers.shift_key();
+                let (pointer, rig) = if win.drag_view == 1 {
+                    (win.second_pointer, win.second_camera.as_mut())
+                } else {
+                    (win.pointer, Some(&mut win.camera))
+                };
+                let camera_drag = pointer.right || pointer.middle;
+                if let Some(rig) = rig.filter(|_| camera_drag) {
+                    input::drag_camera(rig, &pointer, shift, delta);
+                }
+                // The trainee's view: the instrument follows the cursor (a stroke, or hovering).
+                if is_trainee
+                    && live
+                    && !camera_drag
+                    && (state.hand.busy() || win.view_at(cursor) == Some(0))
+                    && !consumed
+                {
+                    drive_hand(state, session, false);
+                }
+            }
+            WindowEvent::MouseInput { state: button_state, button, .. } => {
+                let pressed = button_state == ElementState::Pressed;
+                if pressed {
+                    if consumed {
+                        return;
+                    }
+                    let Some(view) = win.view_at(win.cursor) else { return };
+                    win.drag_view = view;
+                }
+                let pointer = if win.drag_view == 1 { &mut win.second_pointer } else { &mut win.pointer };
+                match button {
+                    MouseButton::Left => pointer.left = pressed,
+                    MouseButton::Right => pointer.right = pressed,
+                    MouseButton::Middle => pointer.middle = pressed,
+                    _ => {}
+                }
+                if button == MouseButton::Left && is_trainee && live {
+                    if pressed && win.drag_view == 0 {
+                        drive_hand(state, session, true);
+                    } else if !pressed {
+                        let mut out = Vec::new();
+                        state.hand.release(state.modifiers.control_key(), &mut out);
+                        queue_all(session, out);
+                    }
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                if consumed {
+                    return;
+                }
+                let notches = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                if is_trainee && live && state.hand.busy() && state.hand.wheel(notches) {
+                    return;
+                }
+                match win.view_at(win.cursor) {
+                    Some(1) => {
+                        if let Some(rig) = win.second_camera.as_mut() {
+                            input::zoom_camera(rig, notches);
+                        }
+                    }
+                    Some(_) => input::zoom_camera(&mut win.camera, notches),
+                    None => {}
+                }
+            }
+            WindowEvent::KeyboardInput { event, .. } => {
+                if consumed || event.state != ElementState::Pressed {
+                    return;
+                }
+                if event.logical_key == Key::Named(NamedKey::Escape) {
+                    state.trainee_ui.help.open = false;
+                    state.observer_ui.help.open = false;
+                    state.trainee_ui.report.open = false;
+                    return;
+                }
+                let roll = match &event.logical_key {
+                    Key::Character(s) if s == "[" => Some(-15.0),
+                    Key::Character(s) if s == "]" => Some(15.0),
+                    _ => None,
+                };
+                let action = match roll {
+                    Some(d) => Some(Action::SetRoll(
+                        (state.hand.tool.roll_deg + d + 180.0).rem_euclid(360.0) - 180.0,
+                    )),
+                    None if event.repeat => None,
+                    None => key_action(&event.logical_key, &session.scene.instruments),
+                };
+                if let Some(a) = action {
+                    apply(state, session, &self.options, a);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if let Err(e) = self.frame(event_loop) {
+            eprintln!("dissect: {e}");
+            self.error = Some(e);
+            event_loop.exit();
+        }
+    }
+
+    fn exiting(&mut self, _event_loop: &ActiveEventLoop) {
+        self.finish();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_map_to_the_actions_the_help_lists() {
+        let instruments = [InstrumentKind::Forceps, InstrumentKind::Scalpel, InstrumentKind::Probe];
+        let key = |s: &str| Key::Character(s.into());
+        assert_eq!(key_action(&key("2"), &instruments), Some(Action::Select(InstrumentKind::Scalpel)));
+        assert_eq!(key_action(&key("3"), &instruments[..2]), None);
+        assert_eq!(key_action(&key("b"), &instruments), Some(Action::SetDepth(CutDepth::Between)));
+        assert_eq!(key_action(&key("?"), &instruments), Some(Action::ToggleHelp));
+        assert_eq!(key_action(&Key::Named(NamedKey::F12), &instruments), Some(Action::Screenshot));
+        assert_eq!(key_action(&Key::Named(NamedKey::F5), &instruments), Some(Action::Reload));
+    }
+
+    #[test]
+    fn a_single_window_splits_its_view_area_in_halves() {
+        let area = egui::Rect::from_min_max(egui::pos2(100.0, 20.0), egui::pos2(900.0, 620.0));
+        let (left, right) = split(area, true);
+        assert_eq!(left.max.x, 500.0);
+        assert_eq!(right.map(|r| r.min.x), Some(500.0));
+        assert_eq!(split(area, false), (area, None));
+    }
+}

@@ -1,0 +1,51 @@
+//! Live figures from the training assessment: completion, damage, stretch, time, motion, score.
+
+use super::{Action, Frame, View};
+
+/// The assessment panel.
+#[derive(Default)]
+pub struct AssessmentPanel;
+
+impl View for AssessmentPanel {
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &Frame<'_>, actions: &mut Vec<Action>) {
+        let Some(a) = frame.assessment else {
+            ui.label("This scene sets no goals, so there is no score. Add `goals: (target: ...)` to the scene to assess the exercise.");
+            ui.label(format!("Peak stretch now: {:.2}", frame.world.tissue().max_stretch()));
+            return;
+        };
+        let limit = frame.scene.goals.as_ref().map(|g| g.stretch_limit).unwrap_or(f32::INFINITY);
+        ui.add(
+            egui::ProgressBar::new(a.completion).text(format!("completion {:.0} %", 100.0 * a.completion)),
+        );
+        egui::Grid::new("assessment").num_columns(2).striped(true).show(ui, |ui| {
+            let warn = egui::Color32::from_rgb(255, 140, 100);
+            let mut row = |k: &str, v: String, bad: bool| {
+                ui.label(k);
+                if bad {
+                    ui.colored_label(warn, v);
+                } else {
+                    ui.label(v);
+                }
+                ui.end_row();
+            };
+            row("target fibres cut", format!("{} / {}", a.target_links_cut, a.target_links), false);
+            row("separation", format!("{:.1} mm", 1000.0 * a.separation_m), false);
+            row("fibres cut outside", a.connective_cut_outside.to_string(), a.connective_cut_outside > 0);
+            row("layer links cut", a.layer_links_cut.to_string(), a.layer_links_cut > 0);
+            row("forbidden broken", a.forbidden_links_broken.to_string(), a.forbidden_links_broken > 0);
+            row("torn", a.links_torn.to_string(), a.links_torn > 0);
+            row("peak stretch", format!("{:.2} (limit {limit:.2})", a.peak_stretch), a.peak_stretch > limit);
+            row("time above limit", format!("{:.2} s", a.time_above_limit_s), a.time_above_limit_s > 0.0);
+            row("elapsed", format!("{:.1} s", a.elapsed_s), a.over_time);
+            row("path length", format!("{:.0} mm", 1000.0 * a.path_length_m), false);
+            row("grasps", a.grasps.to_string(), false);
+        });
+        ui.label(egui::RichText::new(format!("score {:.1}", a.score)).heading());
+        for item in &a.breakdown {
+            ui.label(format!("  {:+.1}  {}", item.points, item.label));
+        }
+        if frame.input_enabled && ui.button("Report (R)").clicked() {
+            actions.push(Action::Report);
+        }
+    }
+}

@@ -1,0 +1,60 @@
+//! The monitor: what the last step did, phase by phase ([`PHASES`]), for the observers.
+
+use super::{Action, Frame, View};
+use crate::simulation::PHASES;
+
+/// The step-counter panel.
+#[derive(Default)]
+pub struct MonitorPanel;
+
+impl View for MonitorPanel {
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &Frame<'_>, _actions: &mut Vec<Action>) {
+        let c = frame.world.last_step();
+        let t = frame.timing;
+        ui.label(format!(
+            "step {} · {:.0} fps · {:.0} steps/s{}",
+            c.step,
+            t.fps(),
+            t.steps_per_second(),
+            if frame.behind { " · behind" } else { "" }
+        ));
+        let total = c.total_us().max(f32::MIN_POSITIVE);
+        egui::Grid::new("phases").striped(true).num_columns(3).show(ui, |ui| {
+            ui.strong("phase");
+            ui.strong("µs");
+            ui.strong("share");
+            ui.end_row();
+            for (name, us) in PHASES.iter().zip(c.phase_us) {
+                ui.label(*name);
+                ui.label(format!("{us:.1}"));
+                ui.add(egui::ProgressBar::new(us / total).desired_width(70.0));
+                ui.end_row();
+            }
+            ui.strong("total");
+            ui.strong(format!("{:.1}", c.total_us()));
+            ui.end_row();
+        });
+        egui::Grid::new("counters").num_columns(2).show(ui, |ui| {
+            let rows: [(&str, String); 8] = [
+                ("moved (chain)", c.moved_chain.to_string()),
+                ("moved (normal)", c.moved_normal.to_string()),
+                ("relax sweeps", c.relax_sweeps.to_string()),
+                ("contact fixes", c.contact_fixes.to_string()),
+                ("links cut", c.links_cut.to_string()),
+                ("links torn", c.links_torn.to_string()),
+                ("grasp allowed", format!("{:.0} %", 100.0 * c.grasp_fraction)),
+                ("moved in total", frame.world.elements_moved_total().to_string()),
+            ];
+            for (k, v) in rows {
+                ui.label(k);
+                ui.label(v);
+                ui.end_row();
+            }
+        });
+        let d = frame.world.tissue().damage();
+        ui.label(format!(
+            "damage: {} layer links cut, {} fibres cut, {} torn",
+            d.layer_links_cut, d.connective_links_cut, d.links_torn
+        ));
+    }
+}
