@@ -86,7 +86,8 @@ fn readme_blocks() -> Vec<String> {
 #[test]
 fn readme_examples_load() {
     let blocks = readme_blocks();
-    assert_eq!(blocks.len(), 2, "the minimal scene and the script example");
+    assert_eq!(blocks.len(), 3, "the minimal scene, the script example and the recording example");
+    dissect::scene::Recording::from_str(&blocks[2], "README.md").unwrap_or_else(|e| panic!("{e}"));
     Scene::from_str(&blocks[0], "README.md").unwrap_or_else(|e| panic!("{e}"));
     let script = Script::from_str(&blocks[1], "README.md").unwrap_or_else(|e| panic!("{e}"));
     let meninges = Scene::default_scene().unwrap_or_else(|e| panic!("{e}"));
