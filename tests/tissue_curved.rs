@@ -99,6 +99,11 @@ fn sphere_deforms_across_its_seam_and_near_a_pole() {
     let s = Surface::Sphere { radius: 0.025 };
     let (t, nu) = pull_at(s, Pinning::None, 0, 1, [0.002, 0.008, 0.004]);
     check_seam(&t, nu);
+    // The poles are not lattice rows, but the drawn surface is closed: a fan round each pole.
+    let mut meshes = Vec::new();
+    t.fill_meshes(&mut meshes);
+    let nv = t.layers()[1].count as usize / nu;
+    assert_eq!(meshes[0].triangles.len(), 2 * nu * (nv - 1) + 2 * nu, "a hole at a pole");
     // The row nearest the pole stays a ring: no link of it collapsed or flew apart.
     let layer = &t.layers()[1];
     for i in 0..nu {

@@ -299,7 +299,28 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
                 triangles.push((t2, [dc, ad]));
             }
         }
+        // A sphere's pole rings are closed by fans round their poles, for drawing only.
+        let mut caps = Vec::new();
+        if matches!(s.surface, Surface::Sphere { .. }) {
+            for (j, south) in [(0, true), (nv - 1, false)] {
+                let ring: Vec<u32> = (0..nu).map(|i| id(i, j, k).0).collect();
+                let links = (0..nu).map(|i| link_of(id(i, j, k), id((i + 1) % nu, j, k), &body)).collect();
+                // Fan (pole, ring[i], ring[i + 1]) faces outwards when its normal points away from the
+                // sphere's centre, like the pole itself.
+                let (p0, p1) =
+                    (world(body.positions()[ring[0] as usize]), world(body.positions()[ring[1] as usize]));
+                let r = (p0[0] * p0[0] + p0[1] * p0[1] + p0[2] * p0[2]).sqrt();
+                let pole = [0.0, if south { -r } else { r }, 0.0];
+                let n = cross(sub(p0, pole), sub(p1, pole));
+                caps.push(super::Cap {
+                    ring,
+                    links,
+                    flip: n[0] * pole[0] + n[1] * pole[1] + n[2] * pole[2] < 0.0,
+                });
+            }
+        }
         layers.push(Layer {
+            caps,
             name: spec.name.clone(),
             color: spec.color,
             first: (k * sheet) as u32,
@@ -410,6 +431,7 @@ fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
         }
     }
     let layers = vec![Layer {
+        caps: Vec::new(),
         name: "volume".into(),
         color: s.color,
         first: 0,

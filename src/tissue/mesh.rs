@@ -24,6 +24,20 @@ impl Tissue {
             slot.positions.clear();
             slot.positions
                 .extend(self.body.positions()[first..first + n].iter().map(|&p| self.geometry.to_world(p)));
+            // Each cap's pole vertex follows the elements: the ring's centroid pushed out to the ring's
+            // mean distance from the centre of the surface.
+            for cap in &layer.caps {
+                let ring = cap.ring.iter().map(|&e| slot.positions[(e - layer.first) as usize]);
+                let (mut c, mut r) = ([0.0f32; 3], 0.0f32);
+                for p in ring {
+                    c = [c[0] + p[0], c[1] + p[1], c[2] + p[2]];
+                    r += (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                }
+                let m = cap.ring.len().max(1) as f32;
+                let len = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt().max(f32::MIN_POSITIVE);
+                let s = r / m / len;
+                slot.positions.push([c[0] * s, c[1] * s, c[2] * s]);
+            }
             if slot.topology_version != self.topology_version || slot.triangles.is_empty() {
                 slot.triangles.clear();
                 slot.triangles.extend(
@@ -35,10 +49,21 @@ impl Tissue {
                         })
                         .map(|&(t, _)| t.map(|v| v - layer.first)),
                 );
+                for (c, cap) in layer.caps.iter().enumerate() {
+                    let pole = (n + c) as u32;
+                    let m = cap.ring.len();
+                    for i in 0..m {
+                        if cap.links[i] != u32::MAX && !self.body.link_intact(LinkId(cap.links[i])) {
+                            continue;
+                        }
+                        let (a, b) = (cap.ring[i] - layer.first, cap.ring[(i + 1) % m] - layer.first);
+                        slot.triangles.push(if cap.flip { [pole, b, a] } else { [pole, a, b] });
+                    }
+                }
                 slot.topology_version = self.topology_version;
             }
             slot.normals.clear();
-            slot.normals.resize(n, [0.0; 3]);
+            slot.normals.resize(slot.positions.len(), [0.0; 3]);
             for t in &slot.triangles {
                 let [a, b, c] = t.map(|v| slot.positions[v as usize]);
                 let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];

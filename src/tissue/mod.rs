@@ -82,6 +82,18 @@ pub struct Layer {
     /// Candidate triangles (element ids, global) with the two lattice links each spans; a triangle is
     /// drawn while both links are intact.
     pub(crate) triangles: Vec<([u32; 3], [u32; 2])>,
+    /// Rings closed by a fan round an extra vertex (a sphere's poles, which are not lattice rows so
+    /// that no link is degenerate): each ring's elements in order, the links between neighbours, and
+    /// whether the fan's winding must be flipped to face outwards.
+    pub(crate) caps: Vec<Cap>,
+}
+
+/// A ring of elements closed by a fan round a vertex drawn at the ring's pole.
+#[derive(Clone, Debug)]
+pub(crate) struct Cap {
+    pub(crate) ring: Vec<u32>,
+    pub(crate) links: Vec<u32>,
+    pub(crate) flip: bool,
 }
 
 /// A topology change, for whoever keeps structures built on the mesh (render buffers, picking).
