@@ -145,10 +145,9 @@ fn numbered(base: &Path, n: u32) -> PathBuf {
     base.with_file_name(format!("{stem}-{n}.ron"))
 }
 
-fn build(scene: &Scene, label: &str, interactive: bool) -> Result<(World, Option<Assessor>), AppError> {
+fn build(scene: &Scene, label: &str) -> Result<(World, Option<Assessor>), AppError> {
     // Sessions relax by sweeps only, never by wall time, so that a recording replays bit for bit; a
     // frame that cannot keep up drops steps instead (see `SIM_BUDGET_PER_FRAME`).
-    let _ = interactive;
     let world = scene
         .build_world(false)
         .map_err(|e| AppError::Scene(format!("{label}: the tissue cannot be built: {e}")))?;
@@ -163,9 +162,8 @@ impl Session {
         scene_source: String,
         scene_label: String,
         driver: Driver,
-        interactive: bool,
     ) -> Result<Self, AppError> {
-        let (world, assessor) = build(&scene, &scene_label, interactive)?;
+        let (world, assessor) = build(&scene, &scene_label)?;
         let clock = FixedClock::new(f64::from(scene.simulation.rate_hz), MAX_STEPS_PER_FRAME);
         let mut snapshot = Snapshot::default();
         world.snapshot_into(&mut snapshot);
@@ -207,7 +205,7 @@ impl Session {
             recordings: 0,
             recorded: 0,
         };
-        let mut session = Self::with(scene, source, label, driver, true)?;
+        let mut session = Self::with(scene, source, label, driver)?;
         session.watch = path.map(Watch::new);
         session.start_recording();
         Ok(session)
@@ -224,7 +222,7 @@ impl Session {
             commands,
             label: path.display().to_string(),
         };
-        Self::with(scene, recording.scene_source, recording.scene, driver, true)
+        Self::with(scene, recording.scene_source, recording.scene, driver)
     }
 
     /// Plays a script on a scene (the hidden `--demo-script`, for screenshots and demonstrations).
@@ -475,7 +473,7 @@ impl Session {
                 return false;
             }
         };
-        let (world, assessor) = match build(&scene, &self.scene_label, true) {
+        let (world, assessor) = match build(&scene, &self.scene_label) {
             Ok(x) => x,
             Err(e) => {
                 eprintln!("{e}");

@@ -244,8 +244,9 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
         Pinning::Edges(e) => (e.clone(), None),
         Pinning::Patch { u, v } => (vec![], Some((*u, *v))),
     };
-    let uf = s.u_coords.clone().unwrap_or_else(|| fractions_of(&sampling.u, sampling.u_period));
-    let vf = s.v_coords.clone().unwrap_or_else(|| fractions_of(&sampling.v, None));
+    let (lo, span) = fraction_extent(&Geometry::Surface(s.surface), body.lattice().rest_positions());
+    let uf: Vec<f32> = sampling.u.iter().map(|u| (u - lo[0]) / span[0]).collect();
+    let vf: Vec<f32> = sampling.v.iter().map(|v| (v - lo[1]) / span[1]).collect();
     for k in 0..nl {
         for (j, &fv) in vf.iter().enumerate() {
             for (i, &fu) in uf.iter().enumerate() {
@@ -493,8 +494,11 @@ impl Tissue {
         on_surface: Vec<bool>,
     ) -> Self {
         let n = body.element_count();
+        let (extent_lo, extent_span) = fraction_extent(&geometry, body.lattice().rest_positions());
         Tissue {
             ws: Workspace::new(&body),
+            extent_lo,
+            extent_span,
             geometry,
             layers,
             link_kind,
@@ -520,11 +524,29 @@ impl Tissue {
 /// A range of `u` and a range of `v`, as fractions.
 type FractionBox = ((f32, f32), (f32, f32));
 
-/// Fractions of a sampling's span (of the period when it wraps).
-fn fractions_of(x: &[f32], period: Option<f32>) -> Vec<f32> {
-    let (lo, hi) = (x[0], x[x.len() - 1]);
-    let span = period.unwrap_or(hi - lo).max(f32::MIN_POSITIVE);
-    x.iter().map(|v| (v - lo) / span).collect()
+/// Where the fractions that scenes and goals use start and how far they span, per lattice axis: a
+/// wrapped `u` spans its whole period, a sphere's `v` runs from pole to pole (its rows are cell centres),
+/// anything else spans its rest positions.
+pub(crate) fn fraction_extent(geometry: &Geometry, rest: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for p in rest {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let mut span = [0, 1, 2].map(|k| hi[k] - lo[k]);
+    if let Geometry::Surface(surface) = geometry {
+        if let Some(period) = surface.u_period() {
+            lo[0] = 0.0;
+            span[0] = period;
+        }
+        if let Surface::Sphere { radius } = *surface {
+            lo[1] = 0.0;
+            span[1] = std::f32::consts::PI * radius;
+        }
+    }
+    (lo, span.map(|x| x.max(f32::MIN_POSITIVE)))
 }
 
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {

@@ -160,6 +160,10 @@ pub struct Tissue {
     pub(crate) notice: Option<String>,
     /// Elements on the outer surface (vertices of a drawn triangle): what instruments can touch.
     pub(crate) on_surface: Vec<bool>,
+    /// Lattice coordinates where surface fractions 0 lie, and what fraction 1 adds (see
+    /// [`Tissue::surface_fractions`]).
+    pub(crate) extent_lo: [f32; 3],
+    pub(crate) extent_span: [f32; 3],
 }
 
 impl Tissue {
@@ -274,22 +278,22 @@ impl Tissue {
     /// The world point at fractions `(uf, vf)` of the surface's `u` and `v` extent and `h` metres along
     /// the normal from the base surface (for a volume: over its top face, `h` above it).
     pub fn surface_point(&self, uf: f32, vf: f32, h: f32) -> [f32; 3] {
-        let rest = self.body.lattice().rest_positions();
-        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
-        for p in rest {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, span) = (self.extent_lo, self.extent_span);
         match self.geometry {
-            Geometry::Surface(s) => {
-                // A wrapped u spans the whole period, not just the first to the last column.
-                let u_span = s.u_period().unwrap_or(hi[0] - lo[0]);
-                s.to_world([lo[0] + uf * u_span, lo[1] + vf * (hi[1] - lo[1]), h])
-            }
-            Geometry::Volume => [lo[0] + uf * (hi[0] - lo[0]), hi[1] + h, lo[2] + vf * (hi[2] - lo[2])],
+            Geometry::Surface(s) => s.to_world([lo[0] + uf * span[0], lo[1] + vf * span[1], h]),
+            Geometry::Volume => [lo[0] + uf * span[0], lo[1] + span[1] + h, lo[2] + vf * span[2]],
         }
+    }
+
+    /// The surface fractions `(u, v)` of a point in lattice coordinates, as scenes, scripts and goals
+    /// give them (for a volume: across its top face).
+    pub fn surface_fractions(&self, p: [f32; 3]) -> (f32, f32) {
+        let (lo, span) = (self.extent_lo, self.extent_span);
+        let k = match self.geometry {
+            Geometry::Surface(_) => 1,
+            Geometry::Volume => 2,
+        };
+        ((p[0] - lo[0]) / span[0], (p[k] - lo[k]) / span[k])
     }
 
     /// Marks an element as held by an instrument (or lets it go).

@@ -177,32 +177,18 @@ pub struct Assessor {
     next_sample: f32,
 }
 
-/// Fractions `(u, v)` of a lattice point within the tissue's rest extent.
-fn fractions(tissue: &Tissue, p: [f32; 3], lo: [f32; 2], span: [f32; 2]) -> (f32, f32) {
-    let _ = tissue;
-    ((p[0] - lo[0]) / span[0].max(f32::MIN_POSITIVE), (p[1] - lo[1]) / span[1].max(f32::MIN_POSITIVE))
-}
-
 impl Assessor {
     /// An assessor for `goals` on `tissue`, stepping at `rate_hz`.
     pub fn new(goals: Goals, tissue: &Tissue, rate_hz: f64) -> Self {
         let rest = tissue.body().lattice().rest_positions();
-        let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
-        for p in rest {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        let span = [hi[0] - lo[0], hi[1] - lo[1]];
         let (mut target, mut outside, mut forbidden, mut target_pairs) = (vec![], vec![], vec![], vec![]);
         let mut rest_gap = 0.0;
         for l in 0..tissue.body().link_count() {
             let id = LinkId(l as u32);
             let Some([a, b]) = tissue.body().lattice().link_ends(id) else { continue };
             let (pa, pb) = (rest[a.index()], rest[b.index()]);
-            let mid = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.0];
-            let (u, v) = fractions(tissue, mid, lo, span);
+            let mid = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2])];
+            let (u, v) = tissue.surface_fractions(mid);
             if goals.forbidden.iter().any(|r| r.contains(u, v)) {
                 forbidden.push(id);
             }
