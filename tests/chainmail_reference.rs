@@ -1,5 +1,5 @@
-//! The engine's fast paths against a plain reference: a straightforward chain reaction (a FIFO queue
-//! of `(candidate, link, sponsor)` entries, each checked against its sponsor through the link's box,
+//! The engine's fast paths against a plain reference: a straightforward chain reaction (Gibson's per-direction
+//! candidate lists of `(candidate, link, sponsor)` entries, each checked against its sponsor through the link's box,
 //! bisection when a fixed element blocks) and a straightforward Jacobi sweep, both written here with
 //! the public API only. On random grids, wrapped grids and irregular link lists, with pins, holds, cuts
 //! and two materials, the engine must give the same positions (compared with `==`), the same moved
@@ -52,57 +52,72 @@ fn reference_reaction(
     old[src] = pos[src];
     pos[src] = goal;
     moved_flag[src] = true;
-    let mut queue: Vec<(usize, LinkId, usize)> = Vec::new();
-    let push = |queue: &mut Vec<(usize, LinkId, usize)>, moved_flag: &[bool], s: usize| {
-        for (nb, l) in lat.neighbours(ElementId(s as u32)) {
+    // Gibson's candidate lists, one per direction (the index of the link in an element's adjacency).
+    let width = (0..n).map(|i| lat.neighbours(ElementId(i as u32)).count()).max().unwrap_or(0);
+    let mut lists: Vec<Vec<(usize, LinkId, usize)>> = vec![Vec::new(); width];
+    let push = |lists: &mut Vec<Vec<(usize, LinkId, usize)>>, moved_flag: &[bool], s: usize| {
+        for (t, (nb, l)) in lat.neighbours(ElementId(s as u32)).enumerate() {
             if !moved_flag[nb.index()] && body.link_intact(l) {
-                queue.push((nb.index(), l, s));
+                lists[t].push((nb.index(), l, s));
             }
         }
     };
-    push(&mut queue, &moved_flag, src);
-    let mut head = 0;
-    while head < queue.len() {
-        let (c, l, s) = queue[head];
-        head += 1;
-        if moved_flag[c] {
-            continue;
-        }
-        let [lo, hi] = body.link_limits(l).expect("limits");
-        let ps = pos[s];
-        let s_is_a = lat.link_ends(l).expect("ends")[0].index() == s;
-        let (blo, bhi) = if s_is_a {
-            ([0, 1, 2].map(|k| ps[k] + lo[k]), [0, 1, 2].map(|k| ps[k] + hi[k]))
-        } else {
-            ([0, 1, 2].map(|k| ps[k] - hi[k]), [0, 1, 2].map(|k| ps[k] - lo[k]))
-        };
-        let pc = pos[c];
-        let q = clamp(pc, blo, bhi, m);
-        if q == pc {
-            continue;
-        }
-        let e = ElementId(c as u32);
-        if body.is_pinned(e) || body.is_held(e) {
-            let po = old[s];
-            let shift = [0, 1, 2].map(|k| po[k] - ps[k]);
-            let before =
-                clamp(pc, [0, 1, 2].map(|k| blo[k] + shift[k]), [0, 1, 2].map(|k| bhi[k] + shift[k]), m);
-            let scale = (hi[0] - lo[0]).abs().max((hi[1] - lo[1]).abs()).max((hi[2] - lo[2]).abs())
-                + (lo[0].abs() + lo[1].abs() + lo[2].abs());
-            if dist(q, pc) > dist(before, pc) + 1e-5 * scale {
-                for &i in &moved {
-                    pos[i] = old[i];
+    push(&mut lists, &moved_flag, src);
+    let mut heads = vec![0usize; width];
+    loop {
+        let mut progressed = false;
+        for t in 0..width {
+            while heads[t] < lists[t].len() {
+                progressed = true;
+                let (c, l, s) = lists[t][heads[t]];
+                heads[t] += 1;
+                if moved_flag[c] {
+                    continue;
                 }
-                return None;
+                let [lo, hi] = body.link_limits(l).expect("limits");
+                let ps = pos[s];
+                let s_is_a = lat.link_ends(l).expect("ends")[0].index() == s;
+                let (blo, bhi) = if s_is_a {
+                    ([0, 1, 2].map(|k| ps[k] + lo[k]), [0, 1, 2].map(|k| ps[k] + hi[k]))
+                } else {
+                    ([0, 1, 2].map(|k| ps[k] - hi[k]), [0, 1, 2].map(|k| ps[k] - lo[k]))
+                };
+                let pc = pos[c];
+                let q = clamp(pc, blo, bhi, m);
+                if q == pc {
+                    continue;
+                }
+                let e = ElementId(c as u32);
+                if body.is_pinned(e) || body.is_held(e) {
+                    let po = old[s];
+                    let shift = [0, 1, 2].map(|k| po[k] - ps[k]);
+                    let before = clamp(
+                        pc,
+                        [0, 1, 2].map(|k| blo[k] + shift[k]),
+                        [0, 1, 2].map(|k| bhi[k] + shift[k]),
+                        m,
+                    );
+                    let scale = (hi[0] - lo[0]).abs().max((hi[1] - lo[1]).abs()).max((hi[2] - lo[2]).abs())
+                        + (lo[0].abs() + lo[1].abs() + lo[2].abs());
+                    if dist(q, pc) > dist(before, pc) + 1e-5 * scale {
+                        for &i in &moved {
+                            pos[i] = old[i];
+                        }
+                        return None;
+                    }
+                    continue;
+                }
+                old[c] = pc;
+                pos[c] = q;
+                moved_flag[c] = true;
+                moved.push(c);
+                sponsors.push(s);
+                push(&mut lists, &moved_flag, c);
             }
-            continue;
         }
-        old[c] = pc;
-        pos[c] = q;
-        moved_flag[c] = true;
-        moved.push(c);
-        sponsors.push(s);
-        push(&mut queue, &moved_flag, c);
+        if !progressed {
+            break;
+        }
     }
     Some((moved, sponsors))
 }

@@ -40,8 +40,14 @@ pub struct Workspace {
     old: Vec<[f32; 3]>,
     /// The sponsor of each moved element (itself for the source), valid where stamped.
     sponsor: Vec<u32>,
-    /// Elements moved by the current deformation, in order; also the chain reaction's queue.
+    /// Elements moved by the current deformation, in the order they moved.
     pub(crate) moved: Vec<u32>,
+    /// Gibson's candidate lists, one per adjacency slot (a direction on grids: x-, x+, y-, y+, z-,
+    /// z+): list `t` occupies `lists[t * n..(t + 1) * n]` and holds moved elements whose neighbour
+    /// through slot `t` is still to be checked. Each moved element enters each list once.
+    lists: Vec<u32>,
+    /// Heads and tails of the candidate lists for widths without a specialised path.
+    list_ends: Vec<usize>,
     /// Relaxation's second buffer.
     pub(crate) next: Vec<[f32; 3]>,
 }
@@ -79,6 +85,9 @@ impl Workspace {
             self.sponsor = vec![0; n];
             self.next = vec![[0.0; 3]; n];
             self.moved = Vec::with_capacity(n);
+        }
+        if self.lists.len() != n * body.width {
+            self.lists = vec![0; n * body.width];
         }
     }
 
@@ -214,12 +223,12 @@ impl Body {
     /// The chain reaction for a constant coordinate mask (bit `k` set: coordinate `k` is constrained
     /// and moved).
     ///
-    /// The list of moved elements is the queue. A candidate is checked against its sponsor as soon as
-    /// the sponsor's row is scanned rather than when it would have left a separate queue: both
-    /// positions involved are final by then (the sponsor has moved, the candidate has not), and rows
-    /// are scanned in the order elements moved, so the moves, their order and their sponsors are those
-    /// of a FIFO queue of `(candidate, link, sponsor)` entries, while each element enters the list at
-    /// most once and no candidate that stays put is queued.
+    /// Gibson's order: one candidate list per direction (adjacency slot `t`; on grids x-, x+, y-, y+,
+    /// z-, z+), processed in turn, each until it is empty, and round again until all are. A moved
+    /// element enters every list; when list `t` reaches it, its neighbour through slot `t` is checked
+    /// against it (both positions are final by then: the sponsor has moved, the candidate has not).
+    /// The walk runs along grid rows, so memory is read in order, and the moves, their order and
+    /// their sponsors are those of per-direction FIFO lists of `(candidate, link, sponsor)` entries.
     fn chain_reaction_in<const MASK: u8>(
         &mut self,
         ws: &mut Workspace,
@@ -228,9 +237,16 @@ impl Body {
     ) -> bool {
         // Constant widths let the row loop unroll: 4 on sheets, 6 in volumes.
         match self.width {
-            4 => self.chain_reaction_rows::<MASK>(ws, source, goal, 4),
-            6 => self.chain_reaction_rows::<MASK>(ws, source, goal, 6),
-            w => self.chain_reaction_rows::<MASK>(ws, source, goal, w),
+            4 => self.chain_reaction_rows::<MASK>(ws, source, goal, 4, &mut [0; 4], &mut [0; 4]),
+            6 => self.chain_reaction_rows::<MASK>(ws, source, goal, 6, &mut [0; 6], &mut [0; 6]),
+            w => {
+                let mut ends = std::mem::take(&mut ws.list_ends);
+                ends.resize(2 * w, 0);
+                let (heads, tails) = ends.split_at_mut(w);
+                let done = self.chain_reaction_rows::<MASK>(ws, source, goal, w, heads, tails);
+                ws.list_ends = ends;
+                done
+            }
         }
     }
 
@@ -241,63 +257,83 @@ impl Body {
         source: usize,
         goal: [f32; 3],
         width: usize,
+        heads: &mut [usize],
+        tails: &mut [usize],
     ) -> bool {
         ws.next_generation();
         let g = ws.generation;
+        let n = self.pos.len();
         let (nbrs, classes, slot_class, flags) =
             (&self.slot_nbr[..], &self.classes[..], &self.slot_class[..], &self.flags[..]);
         let pos = &mut self.pos[..];
-        let (stamp, old, sponsor, moved) =
-            (&mut ws.stamp[..], &mut ws.old[..], &mut ws.sponsor[..], &mut ws.moved);
+        let (stamp, old, sponsor, moved, lists) =
+            (&mut ws.stamp[..], &mut ws.old[..], &mut ws.sponsor[..], &mut ws.moved, &mut ws.lists[..]);
+        let (head, tail) = (&mut heads[..width], &mut tails[..width]);
+        head.fill(0);
+        let lists_used = width;
 
         old[source] = pos[source];
         pos[source] = goal;
         stamp[source] = g;
         sponsor[source] = source as u32;
         moved.push(source as u32);
+        for t in 0..lists_used {
+            lists[t * n] = source as u32;
+            tail[t] = 1;
+        }
 
-        let mut head = 0;
         let mut blocked = false;
-        'reaction: while let Some(&s) = moved.get(head) {
-            head += 1;
-            let s = s as usize;
-            let ps = pos[s];
-            let row = s * width..(s + 1) * width;
-            for (t, (&c, &class)) in nbrs[row.clone()].iter().zip(&slot_class[row]).enumerate() {
-                let c = c as usize;
-                // Stamped: moved already (padding slots point at `s` itself).
-                if stamp[c] == g {
-                    continue;
-                }
-                // The slot bounds `p[s] - p[c]`, so `p[c]` must lie in `[ps - ehi, ps - elo]`; a broken
-                // link's box is infinite and never moves `c`.
-                let [elo, ehi] = classes[class as usize].bounds;
-                let blo = [ps[0] - ehi[0], ps[1] - ehi[1], ps[2] - ehi[2]];
-                let bhi = [ps[0] - elo[0], ps[1] - elo[1], ps[2] - elo[2]];
-                let pc = pos[c];
-                let q = clamp_masked::<MASK>(pc, blo, bhi);
-                if q == pc {
-                    continue;
-                }
-                if flags[c] & FIXED != 0 {
-                    if self.lattice.fixed_blocks(
-                        &self.link_box,
-                        s,
-                        t,
-                        c,
-                        [old[s], ps, pc, q],
-                        mask_of::<MASK>(),
-                    ) {
-                        blocked = true;
-                        break 'reaction;
+        'reaction: loop {
+            let mut progressed = false;
+            for t in 0..lists_used {
+                let list = t * n;
+                while head[t] < tail[t] {
+                    progressed = true;
+                    let s = lists[list + head[t]] as usize;
+                    head[t] += 1;
+                    let (c, class) = (nbrs[s * width + t] as usize, slot_class[s * width + t]);
+                    // Stamped: moved already (padding slots point at `s` itself).
+                    if stamp[c] == g {
+                        continue;
                     }
-                    continue;
+                    // The slot bounds `p[s] - p[c]`, so `p[c]` must lie in `[ps - ehi, ps - elo]`; a
+                    // broken link's box is infinite and never moves `c`.
+                    let ps = pos[s];
+                    let [elo, ehi] = classes[class as usize].bounds;
+                    let blo = [ps[0] - ehi[0], ps[1] - ehi[1], ps[2] - ehi[2]];
+                    let bhi = [ps[0] - elo[0], ps[1] - elo[1], ps[2] - elo[2]];
+                    let pc = pos[c];
+                    let q = clamp_masked::<MASK>(pc, blo, bhi);
+                    if q == pc {
+                        continue;
+                    }
+                    if flags[c] & FIXED != 0 {
+                        if self.lattice.fixed_blocks(
+                            &self.link_box,
+                            s,
+                            t,
+                            c,
+                            [old[s], ps, pc, q],
+                            mask_of::<MASK>(),
+                        ) {
+                            blocked = true;
+                            break 'reaction;
+                        }
+                        continue;
+                    }
+                    old[c] = pc;
+                    pos[c] = q;
+                    stamp[c] = g;
+                    sponsor[c] = s as u32;
+                    moved.push(c as u32);
+                    for u in 0..lists_used {
+                        lists[u * n + tail[u]] = c as u32;
+                        tail[u] += 1;
+                    }
                 }
-                old[c] = pc;
-                pos[c] = q;
-                stamp[c] = g;
-                sponsor[c] = s as u32;
-                moved.push(c as u32);
+            }
+            if !progressed {
+                break;
             }
         }
         if blocked {
