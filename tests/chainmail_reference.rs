@@ -347,3 +347,74 @@ proptest! {
         }
     }
 }
+
+/// The same lattice without its grid structure: the same links in the same order, so the same
+/// adjacency, but no grid dimensions, so every sweep takes the generic path.
+fn without_grid(grid: &Lattice) -> Lattice {
+    let links: Vec<LinkSpec> = (0..grid.link_count())
+        .map(|l| {
+            let l = LinkId(l as u32);
+            let [a, b] = grid.link_ends(l).expect("ends");
+            let rest = grid.link_rest(l).expect("rest");
+            let len = rest.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+            LinkSpec { a, b, rest, scale: [len; 3] }
+        })
+        .collect();
+    Lattice::from_links(grid.rest_positions().to_vec(), &links).expect("links")
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(60))]
+    /// Whole-body sweeps on grids take the stencil fast path; they must give what the generic path
+    /// gives on the same links, bit for bit, with pins, holds, cuts, two materials and wrapped rows.
+    #[test]
+    fn grid_sweeps_match_the_generic_path(
+        dims in (10usize..40, 3usize..12, prop_oneof![Just(1usize), 3usize..6]),
+        wrapped in any::<bool>(),
+        pins in proptest::collection::vec(0u32..100_000, 0..6),
+        holds in proptest::collection::vec(0u32..100_000, 0..3),
+        cuts in proptest::collection::vec(0u32..100_000, 0..20),
+        moves in proptest::collection::vec((0u32..100_000, proptest::array::uniform3(-0.03f32..0.03)), 1..4),
+    ) {
+        let (nx, ny, nz) = dims;
+        let h = 0.01;
+        let mut spec = GridSpec::uniform([nx, ny, nz], h);
+        if wrapped {
+            spec.wrap[0] = Some(nx as f32 * h);
+        }
+        let grid = Lattice::grid(&spec).expect("grid");
+        let plain = without_grid(&grid);
+        let mut bodies = [grid, plain].map(|lattice| {
+            let mut body = Body::new(lattice, Material::relative(1.2, 0.8, 0.3)).expect("body");
+            let mut stiff = Material::relative(1.05, 0.95, 0.05);
+            stiff.stiffness = 3.0;
+            let stiff = body.add_material(stiff).expect("material");
+            body.set_material_where(stiff, |a, b| a[0] < 0.035 && b[0] < 0.035).expect("region");
+            let n = body.element_count() as u32;
+            for &p in &pins {
+                body.set_pinned(ElementId(p % n), true).expect("pin");
+            }
+            for &p in &holds {
+                body.set_held(ElementId(p % n), true).expect("hold");
+            }
+            for &l in &cuts {
+                let l = l % body.link_count() as u32;
+                body.break_link(LinkId(l), BreakReason::Cut).expect("cut");
+            }
+            body
+        });
+        let n = bodies[0].element_count() as u32;
+        for &(e, d) in &moves {
+            let e = ElementId(e % n);
+            let mut reports = Vec::new();
+            for body in &mut bodies {
+                let mut ws = Workspace::new(body);
+                let p = body.position(e).expect("e");
+                body.deform(&mut ws, e, [p[0] + d[0], p[1] + d[1], p[2] + d[2]], Pass::All).expect("deform");
+                reports.push(body.relax(&mut ws, RelaxBudget::sweeps(3), RelaxRegion::All));
+            }
+            prop_assert_eq!(reports[0], reports[1]);
+            prop_assert!(same(bodies[0].positions(), bodies[1].positions()), "stencil and generic sweeps differ");
+        }
+    }
+}

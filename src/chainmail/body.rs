@@ -6,6 +6,7 @@ use super::error::ChainMailError;
 use super::ids::{ElementId, LinkId, MaterialId};
 use super::lattice::{Lattice, norm, sub};
 use super::material::Material;
+use super::stencil::Stencil;
 
 /// Element flag: pinned by the scene (held by surrounding anatomy); never moved.
 pub(crate) const PINNED: u8 = 1;
@@ -51,6 +52,9 @@ pub struct Body {
     pub(crate) classes: Vec<SlotClass>,
     /// Where each class sits in `classes`, by its bits.
     class_index: HashMap<[u32; 8], u32>,
+    /// The grid fast path of relaxation, for grid lattices; marked stale by any change of pins,
+    /// holds, cuts or materials.
+    pub(crate) stencil: Option<Stencil>,
 }
 
 /// What a slot's link demands, as seen from the slot's owner.
@@ -104,14 +108,24 @@ impl Body {
             link_box: vec![[[0.0; 3]; 2]; m],
             link_state: vec![INTACT; m],
             lattice,
+            stencil: None,
         };
         for l in 0..m {
             body.update_link_box(l);
         }
+        body.stencil = Stencil::for_body(&body);
         Ok(body)
     }
 
+    /// Marks the stencil stale: pins, holds, cuts or materials changed.
+    fn touch(&mut self) {
+        if let Some(s) = &mut self.stencil {
+            s.fresh = false;
+        }
+    }
+
     fn update_link_box(&mut self, l: usize) {
+        self.touch();
         let lat = &self.lattice;
         let mat = &self.materials[self.link_material[l].index()];
         let (lo, hi) = mat.link_box(lat.rest_offset[l], lat.axis[l] as usize, lat.scale[l]);
@@ -246,6 +260,7 @@ impl Body {
 
     fn set_flag(&mut self, e: ElementId, flag: u8, on: bool) -> Result<(), ChainMailError> {
         self.check_element(e)?;
+        self.touch();
         let f = &mut self.flags[e.index()];
         if on {
             *f |= flag
@@ -348,6 +363,7 @@ impl Body {
             return Ok(false);
         }
         self.link_state[i] = reason as u8;
+        self.touch();
         for s in self.slots_of(i) {
             self.slot_class[s] = 0;
         }

@@ -268,6 +268,12 @@ impl Body {
         let pos = &mut self.pos[..];
         let (stamp, old, sponsor, moved, lists) =
             (&mut ws.stamp[..], &mut ws.old[..], &mut ws.sponsor[..], &mut ws.moved, &mut ws.lists[..]);
+        // Interior grid elements find their neighbours by offset, which keeps a load off the chain of
+        // dependent loads (list entry, neighbour, its stamp); others read their adjacency row.
+        let (offs, interior): (&[isize], &[u8]) = match &self.stencil {
+            Some(st) => (&st.offs, &st.interior),
+            None => (&[], &[]),
+        };
         let (head, tail) = (&mut heads[..width], &mut tails[..width]);
         head.fill(0);
         let lists_used = width;
@@ -291,7 +297,11 @@ impl Body {
                     progressed = true;
                     let s = lists[list + head[t]] as usize;
                     head[t] += 1;
-                    let (c, class) = (nbrs[s * width + t] as usize, slot_class[s * width + t]);
+                    let c = match (interior.get(s), offs.get(t)) {
+                        (Some(1), Some(&o)) => s.wrapping_add_signed(o),
+                        _ => nbrs[s * width + t] as usize,
+                    };
+                    let class = slot_class[s * width + t];
                     // Stamped: moved already (padding slots point at `s` itself).
                     if stamp[c] == g {
                         continue;

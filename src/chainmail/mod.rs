@@ -24,6 +24,7 @@ mod ids;
 mod lattice;
 mod material;
 mod relax;
+mod stencil;
 
 pub use body::{Body, BreakReason};
 pub use deform::{Deformation, Pass, Workspace};

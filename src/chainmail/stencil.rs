@@ -1,0 +1,334 @@
+//! The grid fast path of a whole-body relaxation sweep.
+//!
+//! On a grid lattice most elements are *regular*: free, with every neighbour at a fixed offset in the
+//! flat arrays (`i ± 1`, `i ± nx`, `i ± nx·ny`, in the adjacency's slot order) and every link of the
+//! class its direction has at that grid coordinate (on a rectilinear grid of one material an x-link's
+//! box depends only on its x coordinate, a y-link's only on y, a z-link's only on z). Runs of eight
+//! regular elements along x are relaxed as one block over flat `f32` streams, which the compiler turns
+//! into SIMD: the same arithmetic, in the same order, as the generic row loop, so the result is bit
+//! for bit the same. Everything else (borders, wrap seams, cut links, pins, held elements, other
+//! materials, curvilinear grids) goes through the generic row loop.
+
+use super::body::{Body, FIXED, SlotClass};
+
+/// Elements per block: eight, 24 floats, three AVX or six SSE registers per stream.
+const BLOCK: usize = 16;
+const LANES: usize = 3 * BLOCK;
+
+type Lanes = [f32; LANES];
+
+/// What the fast path knows of a grid body; rebuilt when pins, cuts or materials change.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Stencil {
+    /// Grid dimensions.
+    dims: [usize; 3],
+    /// Flat offset of the neighbour in each adjacency slot of an interior element.
+    pub(crate) offs: Vec<isize>,
+    /// 1 where an element's slots hold exactly the neighbours at `offs` (a fact of the lattice: not a
+    /// border, not a wrap seam). The chain reaction finds those neighbours by adding the offset.
+    pub(crate) interior: Vec<u8>,
+    /// Grid axis of each slot.
+    slot_axis: Vec<usize>,
+    /// For each slot, the class a regular element has there, by grid coordinate along the slot's
+    /// axis (the class most elements have).
+    pattern: Vec<Vec<u32>>,
+    /// 1 where an element is regular.
+    regular: Vec<u8>,
+    /// For the x slots (0 and 1): bounds and weight of each element's link, as flat streams of
+    /// three floats per element (lo, hi, w per slot).
+    x_lo: [Vec<f32>; 2],
+    x_hi: [Vec<f32>; 2],
+    x_w: [Vec<f32>; 2],
+    /// Whether `regular` and the streams describe the body as it is.
+    pub(crate) fresh: bool,
+}
+
+impl Stencil {
+    /// The stencil of a grid body, if the body has the grid's slot layout (two slots per axis of more
+    /// than one element, x first), else `None`.
+    pub(crate) fn for_body(body: &Body) -> Option<Self> {
+        let dims = body.lattice.dims?;
+        let [nx, ny, _] = dims;
+        let strides = [1isize, nx as isize, (nx * ny) as isize];
+        let mut offs = Vec::new();
+        let mut slot_axis = Vec::new();
+        for (axis, &len) in dims.iter().enumerate() {
+            if len >= 2 {
+                offs.extend([-strides[axis], strides[axis]]);
+                slot_axis.extend([axis, axis]);
+            }
+        }
+        if offs.len() != body.width || slot_axis.first() != Some(&0) {
+            return None;
+        }
+        let w = body.width;
+        let n = body.pos.len();
+        let interior = (0..n)
+            .map(|i| {
+                let row = &body.slot_nbr[i * w..(i + 1) * w];
+                let at = |t: usize| i as isize + offs[t];
+                row.iter().enumerate().all(|(t, &j)| (0..n as isize).contains(&at(t)) && j as isize == at(t))
+                    as u8
+            })
+            .collect();
+        let pattern = slot_axis.iter().map(|&a| vec![0; dims[a]]).collect();
+        Some(Self { dims, offs, interior, slot_axis, pattern, ..Self::default() })
+    }
+
+    /// Finds the common class of each slot by grid coordinate (Boyer-Moore majority vote), marks the
+    /// regular elements, and lays out the x streams.
+    pub(crate) fn refresh(&mut self, body: &Body) {
+        let [nx, ny, _] = self.dims;
+        let n = body.pos.len();
+        let w = body.width;
+        let coord = |i: usize, axis: usize| match axis {
+            0 => i % nx,
+            1 => (i / nx) % ny,
+            _ => i / (nx * ny),
+        };
+        for (t, pattern) in self.pattern.iter_mut().enumerate() {
+            let axis = self.slot_axis[t];
+            let mut count = vec![0u32; pattern.len()];
+            for i in 0..n {
+                let c = coord(i, axis);
+                let class = body.slot_class[i * w + t];
+                if count[c] == 0 {
+                    pattern[c] = class;
+                    count[c] = 1;
+                } else if pattern[c] == class {
+                    count[c] += 1;
+                } else {
+                    count[c] -= 1;
+                }
+            }
+        }
+        self.regular.resize(n, 0);
+        for i in 0..n {
+            let row = &body.slot_class[i * w..(i + 1) * w];
+            let ok = self.interior[i] == 1
+                && body.flags[i] & FIXED == 0
+                && (0..w).all(|t| {
+                    let class = self.pattern[t][coord(i, self.slot_axis[t])];
+                    row[t] == class && class != 0
+                });
+            self.regular[i] = ok as u8;
+        }
+        for t in 0..2 {
+            let (lo, hi, wt) = (&mut self.x_lo[t], &mut self.x_hi[t], &mut self.x_w[t]);
+            lo.clear();
+            hi.clear();
+            wt.clear();
+            for &class in &self.pattern[t] {
+                let SlotClass { bounds: [l, h], w } = body.classes[class as usize];
+                lo.extend(l);
+                hi.extend(h);
+                wt.extend([w; 3]);
+            }
+        }
+        self.fresh = true;
+    }
+}
+
+/// The per-direction inputs of one block: neighbour positions and rest positions, bounds, weights.
+#[derive(Clone, Copy)]
+struct Dir<'a> {
+    p: &'a Lanes,
+    r: &'a Lanes,
+    lo: &'a Lanes,
+    hi: &'a Lanes,
+    w: &'a Lanes,
+}
+
+/// Relaxes one block of regular elements: `relaxed_row` lane by lane, slots in the same order.
+#[inline(always)]
+fn block<const W: usize>(p: &Lanes, r: &Lanes, dirs: &[Dir<'_>; W], out: &mut Lanes, change: &mut Lanes) {
+    for k in 0..LANES {
+        let mut acc = 0.0f32;
+        let mut wsum = 0.0f32;
+        let mut lo = f32::NEG_INFINITY;
+        let mut hi = f32::INFINITY;
+        for d in dirs {
+            let pj = d.p[k];
+            acc += d.w[k] * (pj - d.r[k]);
+            let (l, h) = (pj + d.lo[k], pj + d.hi[k]);
+            lo = if l > lo { l } else { lo };
+            hi = if h < hi { h } else { hi };
+            wsum += d.w[k];
+        }
+        let pk = p[k];
+        let inv = super::relax::OMEGA / wsum;
+        let target = pk + (acc * inv - super::relax::OMEGA * (pk - r[k]));
+        let floor = if lo < pk { lo } else { pk };
+        let ceil = if hi > pk { hi } else { pk };
+        let t = if target > floor { target } else { floor };
+        let q = if t < ceil { t } else { ceil };
+        let q = if wsum > 0.0 { q } else { pk };
+        out[k] = q;
+        let moved = (q - pk).abs();
+        change[k] = if moved > change[k] { moved } else { change[k] };
+    }
+}
+
+/// One stencil sweep as an operation for [`pulp::Arch::dispatch`].
+struct Sweep<'a, const W: usize> {
+    body: &'a Body,
+    stencil: &'a Stencil,
+    next: &'a mut [[f32; 3]],
+}
+
+impl<const W: usize> pulp::WithSimd for Sweep<'_, W> {
+    type Output = Option<f32>;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) -> Option<f32> {
+        self.body.sweep_stencil_w::<W>(self.stencil, self.next)
+    }
+}
+
+/// The block of a stream starting at `at`. Regular elements have all their neighbours inside the
+/// grid, so blocks are always whole; an empty block (never taken) keeps this free of panics.
+const EMPTY: Lanes = [0.0; LANES];
+
+#[inline(always)]
+fn lanes(s: &[f32], at: usize) -> &Lanes {
+    let block = s.get(at..at + LANES).and_then(|s| s.try_into().ok());
+    debug_assert!(block.is_some(), "block at {at} of {}", s.len());
+    block.unwrap_or(&EMPTY)
+}
+
+impl Body {
+    /// One Jacobi sweep over every element through the grid fast path; `None` if this body has no
+    /// stencil. Writes `next` for every element and returns the largest move.
+    pub(crate) fn sweep_stencil(&mut self, next: &mut [[f32; 3]]) -> Option<f32> {
+        if self.stencil.as_ref()?.dims[0] < BLOCK + 2 {
+            return None;
+        }
+        let mut stencil = self.stencil.take()?;
+        if !stencil.fresh {
+            stencil.refresh(self);
+        }
+        // The sweep is compiled once per instruction set and the widest the CPU has is chosen at run
+        // time (AVX2 on most x86-64 machines); the arithmetic, and so the result, is the same.
+        let arch = pulp::Arch::new();
+        let change = match stencil.offs.len() {
+            4 => arch.dispatch(Sweep::<4> { body: self, stencil: &stencil, next }),
+            6 => arch.dispatch(Sweep::<6> { body: self, stencil: &stencil, next }),
+            _ => None,
+        };
+        self.stencil = Some(stencil);
+        change
+    }
+
+    #[inline(always)]
+    fn sweep_stencil_w<const W: usize>(&self, st: &Stencil, next: &mut [[f32; 3]]) -> Option<f32> {
+        let [nx, ny, nz] = st.dims;
+        let n = self.pos.len();
+        if next.len() != n || st.regular.len() != n {
+            return None;
+        }
+        let (pos, rest) = (&self.pos[..], &self.lattice.rest[..]);
+        let (pf, rf) = (pos.as_flattened(), rest.as_flattened());
+        let mut scalar_change = 0.0f32;
+        let mut lane_change = [0.0f32; LANES];
+        let mut generic = |i: usize, next: &mut [[f32; 3]]| {
+            let p = pos[i];
+            let q = if self.flags[i] & FIXED != 0 { p } else { self.relaxed(i) };
+            scalar_change = super::relax::max_change(scalar_change, p, q);
+            next[i] = q;
+        };
+        // Per-row constant streams for the y and z slots, rebuilt when a row's class changes.
+        let mut row_lo = [[0.0f32; LANES]; W];
+        let mut row_hi = [[0.0f32; LANES]; W];
+        let mut row_w = [[0.0f32; LANES]; W];
+        let mut row_class = [u32::MAX; W];
+        let interior = |c: usize, len: usize| len < 2 || (c > 0 && c + 1 < len);
+        for k in 0..nz {
+            for j in 0..ny {
+                let row = nx * (j + ny * k);
+                if !(interior(j, ny) && interior(k, nz)) {
+                    for i in row..row + nx {
+                        generic(i, next);
+                    }
+                    continue;
+                }
+                for t in 2..W {
+                    let c = if st.slot_axis[t] == 1 { j } else { k };
+                    let class = st.pattern[t][c];
+                    if row_class[t] != class {
+                        row_class[t] = class;
+                        let SlotClass { bounds: [l, h], w } = self.classes[class as usize];
+                        for e in 0..LANES {
+                            row_lo[t][e] = l[e % 3];
+                            row_hi[t][e] = h[e % 3];
+                            row_w[t][e] = w;
+                        }
+                    }
+                }
+                generic(row, next);
+                // Blocks of eight along the row's interior `1..nx - 1`; the last one is moved back to
+                // end at `nx - 1`, overlapping its neighbour (the overlap is computed twice, alike).
+                let mut i = 1;
+                while i < nx - 1 {
+                    let i0 = i.min(nx - 1 - BLOCK);
+                    let e = row + i0;
+                    let flags: Option<[u8; BLOCK]> =
+                        st.regular.get(e..e + BLOCK).and_then(|r| r.try_into().ok());
+                    if flags.map(u128::from_ne_bytes) != Some(u128::from_ne_bytes([1; BLOCK])) {
+                        for e in row + i..row + i0 + BLOCK {
+                            generic(e, next);
+                        }
+                        i = i0 + BLOCK;
+                        continue;
+                    }
+                    let f = 3 * e;
+                    let empty = Dir { p: &EMPTY, r: &EMPTY, lo: &EMPTY, hi: &EMPTY, w: &EMPTY };
+                    let mut dirs = [empty; W];
+                    for (t, dir) in dirs.iter_mut().enumerate() {
+                        let g = (f as isize + 3 * st.offs[t]) as usize;
+                        let (lo, hi, w) = if t < 2 {
+                            (
+                                lanes(&st.x_lo[t], 3 * i0),
+                                lanes(&st.x_hi[t], 3 * i0),
+                                lanes(&st.x_w[t], 3 * i0),
+                            )
+                        } else {
+                            (&row_lo[t], &row_hi[t], &row_w[t])
+                        };
+                        *dir = Dir { p: lanes(pf, g), r: lanes(rf, g), lo, hi, w };
+                    }
+                    let out: &mut Lanes = match next.as_flattened_mut().get_mut(f..f + LANES) {
+                        Some(s) => match s.try_into() {
+                            Ok(s) => s,
+                            Err(_) => return None,
+                        },
+                        None => return None,
+                    };
+                    block::<W>(lanes(pf, f), lanes(rf, f), &dirs, out, &mut lane_change);
+                    i = i0 + BLOCK;
+                }
+                generic(row + nx - 1, next);
+            }
+        }
+        Some(lane_change.iter().fold(scalar_change, |m, &c| if c > m { c } else { m }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Body, Lattice, Material, RelaxBudget, RelaxRegion, Workspace};
+
+    #[test]
+    fn interior_of_a_plain_sheet_is_regular() {
+        let body =
+            Body::new(Lattice::sheet(64, 32, 0.001).expect("sheet"), Material::relative(1.2, 0.8, 0.3))
+                .expect("body");
+        let mut st = body.stencil.clone().expect("stencil");
+        st.refresh(&body);
+        let regular = st.regular.iter().filter(|&&r| r == 1).count();
+        assert_eq!(regular, 62 * 30, "every interior element is regular");
+        let mut body = body;
+        let mut ws = Workspace::new(&body);
+        body.relax(&mut ws, RelaxBudget::sweeps(2), RelaxRegion::All);
+        assert!(body.stencil.as_ref().is_some_and(|s| s.fresh), "refreshed once, then kept");
+    }
+}
