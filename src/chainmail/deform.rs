@@ -225,7 +225,8 @@ impl Body {
     ///
     /// Gibson's order: one candidate list per direction (adjacency slot `t`; on grids x-, x+, y-, y+,
     /// z-, z+), processed in turn, each until it is empty, and round again until all are. A moved
-    /// element enters every list; when list `t` reaches it, its neighbour through slot `t` is checked
+    /// element enters the list of each direction whose neighbour has not moved yet (padding slots
+    /// point at the element itself, which has); when list `t` reaches it, its neighbour through slot `t` is checked
     /// against it (both positions are final by then: the sponsor has moved, the candidate has not).
     /// The walk runs along grid rows, so memory is read in order, and the moves, their order and
     /// their sponsors are those of per-direction FIFO lists of `(candidate, link, sponsor)` entries.
@@ -263,16 +264,22 @@ impl Body {
         ws.next_generation();
         let g = ws.generation;
         let n = self.pos.len();
+        // Every per-element slice cut to exactly `n`, so one bounds check on an index serves them all.
         let (nbrs, classes, slot_class, flags) =
-            (&self.slot_nbr[..], &self.classes[..], &self.slot_class[..], &self.flags[..]);
-        let pos = &mut self.pos[..];
-        let (stamp, old, sponsor, moved, lists) =
-            (&mut ws.stamp[..], &mut ws.old[..], &mut ws.sponsor[..], &mut ws.moved, &mut ws.lists[..]);
+            (&self.slot_nbr[..n * width], &self.classes[..], &self.slot_class[..n * width], &self.flags[..n]);
+        let pos = &mut self.pos[..n];
+        let (stamp, old, sponsor, moved, lists) = (
+            &mut ws.stamp[..n],
+            &mut ws.old[..n],
+            &mut ws.sponsor[..n],
+            &mut ws.moved,
+            &mut ws.lists[..n * width],
+        );
         // Interior grid elements find their neighbours by offset, which keeps a load off the chain of
         // dependent loads (list entry, neighbour, its stamp); others read their adjacency row.
         let (offs, interior): (&[isize], &[u8]) = match &self.stencil {
-            Some(st) => (&st.offs, &st.interior),
-            None => (&[], &[]),
+            Some(st) if st.interior.len() == n => (&st.offs, &st.interior[..n]),
+            _ => (&[], &[]),
         };
         let (head, tail) = (&mut heads[..width], &mut tails[..width]);
         head.fill(0);
@@ -336,9 +343,17 @@ impl Body {
                     stamp[c] = g;
                     sponsor[c] = s as u32;
                     moved.push(c as u32);
+                    // Gibson: sponsor only neighbours that have not moved (the sponsor among them).
+                    let at_offset = interior.get(c) == Some(&1);
                     for u in 0..lists_used {
-                        lists[u * n + tail[u]] = c as u32;
-                        tail[u] += 1;
+                        let d = match (at_offset, offs.get(u)) {
+                            (true, Some(&o)) => c.wrapping_add_signed(o),
+                            _ => nbrs[c * width + u] as usize,
+                        };
+                        if stamp.get(d) != Some(&g) {
+                            lists[u * n + tail[u]] = c as u32;
+                            tail[u] += 1;
+                        }
                     }
                 }
             }
