@@ -371,6 +371,7 @@ proptest! {
     fn grid_sweeps_match_the_generic_path(
         dims in (10usize..40, 3usize..12, prop_oneof![Just(1usize), 3usize..6]),
         wrapped in any::<bool>(),
+        one_stiffness in any::<bool>(),
         pins in proptest::collection::vec(0u32..100_000, 0..6),
         holds in proptest::collection::vec(0u32..100_000, 0..3),
         cuts in proptest::collection::vec(0u32..100_000, 0..20),
@@ -386,8 +387,9 @@ proptest! {
         let plain = without_grid(&grid);
         let mut bodies = [grid, plain].map(|lattice| {
             let mut body = Body::new(lattice, Material::relative(1.2, 0.8, 0.3)).expect("body");
+            // One stiffness (the blocks' division-free path) or two.
             let mut stiff = Material::relative(1.05, 0.95, 0.05);
-            stiff.stiffness = 3.0;
+            stiff.stiffness = if one_stiffness { 1.0 } else { 3.0 };
             let stiff = body.add_material(stiff).expect("material");
             body.set_material_where(stiff, |a, b| a[0] < 0.035 && b[0] < 0.035).expect("region");
             let n = body.element_count() as u32;

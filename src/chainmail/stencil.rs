@@ -39,6 +39,13 @@ pub(crate) struct Stencil {
     x_lo: [Vec<f32>; 2],
     x_hi: [Vec<f32>; 2],
     x_w: [Vec<f32>; 2],
+    /// For the y and z slots, whose class is constant along a row: the blocks of bounds and weight
+    /// (lo, hi, w) of each class the patterns use, and for each slot and coordinate which one.
+    row_blocks: Vec<[Lanes; 3]>,
+    row_block_of: Vec<Vec<u32>>,
+    /// `OMEGA / Σ w` of every regular element when all their links weigh the same (one stiffness, the
+    /// usual case), computed as the generic path computes it: blocks then skip the division.
+    uniform_inv: Option<f32>,
     /// Whether `regular` and the streams describe the body as it is.
     pub(crate) fresh: bool,
 }
@@ -125,6 +132,32 @@ impl Stencil {
                 wt.extend([w; 3]);
             }
         }
+        let mut block_of_class = std::collections::HashMap::new();
+        self.row_blocks.clear();
+        self.row_block_of.clear();
+        for pattern in self.pattern.iter().skip(2) {
+            let mut of = Vec::with_capacity(pattern.len());
+            for &class in pattern {
+                let index = *block_of_class.entry(class).or_insert_with(|| {
+                    let SlotClass { bounds: [l, h], w } = body.classes[class as usize];
+                    let lanes = |f: &dyn Fn(usize) -> f32| std::array::from_fn(|e| f(e % 3));
+                    self.row_blocks.push([lanes(&|c| l[c]), lanes(&|c| h[c]), [w; LANES]]);
+                    self.row_blocks.len() as u32 - 1
+                });
+                of.push(index);
+            }
+            self.row_block_of.push(of);
+        }
+        // One weight for every class a regular element can have (the non-free pattern classes)?
+        let mut weights =
+            self.pattern.iter().flatten().filter(|&&c| c != 0).map(|&c| body.classes[c as usize].w);
+        self.uniform_inv = match weights.next() {
+            Some(w) if w > 0.0 && weights.all(|x| x.to_bits() == w.to_bits()) => {
+                let wsum = (0..self.offs.len()).fold(0.0f32, |s, _| s + w);
+                Some(super::relax::OMEGA / wsum)
+            }
+            _ => None,
+        };
         self.fresh = true;
     }
 }
@@ -139,9 +172,17 @@ struct Dir<'a> {
     w: &'a Lanes,
 }
 
-/// Relaxes one block of regular elements: `relaxed_row` lane by lane, slots in the same order.
+/// Relaxes one block of regular elements: `relaxed_row` lane by lane, slots in the same order. With
+/// `UNIFORM` every link weighs the same and `inv` is `OMEGA / Σ w`, computed once.
 #[inline(always)]
-fn block<const W: usize>(p: &Lanes, r: &Lanes, dirs: &[Dir<'_>; W], out: &mut Lanes, change: &mut Lanes) {
+fn block<const W: usize, const UNIFORM: bool>(
+    p: &Lanes,
+    r: &Lanes,
+    dirs: &[Dir<'_>; W],
+    inv: f32,
+    out: &mut Lanes,
+    change: &mut Lanes,
+) {
     for k in 0..LANES {
         let mut acc = 0.0f32;
         let mut wsum = 0.0f32;
@@ -153,16 +194,18 @@ fn block<const W: usize>(p: &Lanes, r: &Lanes, dirs: &[Dir<'_>; W], out: &mut La
             let (l, h) = (pj + d.lo[k], pj + d.hi[k]);
             lo = if l > lo { l } else { lo };
             hi = if h < hi { h } else { hi };
-            wsum += d.w[k];
+            if !UNIFORM {
+                wsum += d.w[k];
+            }
         }
         let pk = p[k];
-        let inv = super::relax::OMEGA / wsum;
+        let inv = if UNIFORM { inv } else { super::relax::OMEGA / wsum };
         let target = pk + (acc * inv - super::relax::OMEGA * (pk - r[k]));
         let floor = if lo < pk { lo } else { pk };
         let ceil = if hi > pk { hi } else { pk };
         let t = if target > floor { target } else { floor };
         let q = if t < ceil { t } else { ceil };
-        let q = if wsum > 0.0 { q } else { pk };
+        let q = if UNIFORM || wsum > 0.0 { q } else { pk };
         out[k] = q;
         let moved = (q - pk).abs();
         change[k] = if moved > change[k] { moved } else { change[k] };
@@ -236,11 +279,8 @@ impl Body {
             scalar_change = super::relax::max_change(scalar_change, p, q);
             next[i] = q;
         };
-        // Per-row constant streams for the y and z slots, rebuilt when a row's class changes.
-        let mut row_lo = [[0.0f32; LANES]; W];
-        let mut row_hi = [[0.0f32; LANES]; W];
-        let mut row_w = [[0.0f32; LANES]; W];
-        let mut row_class = [u32::MAX; W];
+        let empty: [Lanes; 3] = [EMPTY; 3];
+        let mut row_block = [&empty; W];
         let interior = |c: usize, len: usize| len < 2 || (c > 0 && c + 1 < len);
         for k in 0..nz {
             for j in 0..ny {
@@ -251,18 +291,11 @@ impl Body {
                     }
                     continue;
                 }
-                for t in 2..W {
+                // The y and z slots' blocks for this row.
+                for (t, block) in row_block.iter_mut().enumerate().skip(2) {
                     let c = if st.slot_axis[t] == 1 { j } else { k };
-                    let class = st.pattern[t][c];
-                    if row_class[t] != class {
-                        row_class[t] = class;
-                        let SlotClass { bounds: [l, h], w } = self.classes[class as usize];
-                        for e in 0..LANES {
-                            row_lo[t][e] = l[e % 3];
-                            row_hi[t][e] = h[e % 3];
-                            row_w[t][e] = w;
-                        }
-                    }
+                    let index = st.row_block_of.get(t - 2).and_then(|of| of.get(c));
+                    *block = index.and_then(|&b| st.row_blocks.get(b as usize)).unwrap_or(&empty);
                 }
                 generic(row, next);
                 // Blocks of eight along the row's interior `1..nx - 1`; the last one is moved back to
@@ -292,7 +325,7 @@ impl Body {
                                 lanes(&st.x_w[t], 3 * i0),
                             )
                         } else {
-                            (&row_lo[t], &row_hi[t], &row_w[t])
+                            (&row_block[t][0], &row_block[t][1], &row_block[t][2])
                         };
                         *dir = Dir { p: lanes(pf, g), r: lanes(rf, g), lo, hi, w };
                     }
@@ -303,7 +336,11 @@ impl Body {
                         },
                         None => return None,
                     };
-                    block::<W>(lanes(pf, f), lanes(rf, f), &dirs, out, &mut lane_change);
+                    let (p, r) = (lanes(pf, f), lanes(rf, f));
+                    match st.uniform_inv {
+                        Some(inv) => block::<W, true>(p, r, &dirs, inv, out, &mut lane_change),
+                        None => block::<W, false>(p, r, &dirs, 0.0, out, &mut lane_change),
+                    }
                     i = i0 + BLOCK;
                 }
                 generic(row + nx - 1, next);
