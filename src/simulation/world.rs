@@ -200,6 +200,7 @@ impl World {
             // The grasped element tore free: nothing left to hold.
             self.release();
         }
+        self.tissue.end_step();
         c.phase_us[5] = ms(t);
 
         // Bookkeeping.

@@ -507,6 +507,7 @@ impl Tissue {
             min_gap,
             active: Vec::with_capacity(n),
             in_active: vec![false; n],
+            settled: false,
             cut_queue: Vec::new(),
             events: Vec::new(),
             topology_version: 0,

@@ -147,6 +147,9 @@ pub struct Tissue {
     /// Elements disturbed since relaxation last converged.
     pub(crate) active: Vec<ElementId>,
     pub(crate) in_active: Vec<bool>,
+    /// The last relaxation converged and nothing has moved since: [`Tissue::end_step`] may forget the
+    /// disturbed region.
+    pub(crate) settled: bool,
     pub(crate) cut_queue: Vec<CutSegment>,
     pub(crate) events: Vec<TopologyEvent>,
     pub(crate) topology_version: u64,
@@ -436,18 +439,27 @@ impl Tissue {
         d.moved
     }
 
-    /// Relaxes the disturbed region within `budget`; forgets the region once it has converged.
+    /// Relaxes the disturbed region within `budget`. The region is kept for the step's contact and
+    /// tear checks, which look only there; [`Tissue::end_step`] forgets it once it has converged.
     pub fn relax(&mut self, budget: RelaxBudget) -> crate::chainmail::RelaxReport {
         if self.active.is_empty() || self.fem.is_some() {
+            self.settled = true;
             return crate::chainmail::RelaxReport { converged: true, ..Default::default() };
         }
         let report = self.body.relax_elements(&mut self.ws, budget, &self.active);
-        if report.converged {
+        self.settled = report.converged;
+        report
+    }
+
+    /// Closes a step: forgets the disturbed region if the step's relaxation converged and contact
+    /// moved nothing afterwards.
+    pub fn end_step(&mut self) {
+        if self.settled {
             for e in self.active.drain(..) {
                 self.in_active[e.index()] = false;
             }
         }
-        report
+        self.settled = false;
     }
 
     /// Relaxes the whole body within `budget` (for spare time, and for tests).
@@ -465,11 +477,10 @@ impl Tissue {
         let mut fixed = 0;
         let count = self.active.len();
         for k in 0..count {
+            // Either element of a pair may be the disturbed one (a grasped lower layer pushed up into
+            // an upper layer cut free of it moves only itself).
             let e = self.active[k];
-            let Some(lower) = (if e.0 >= self.sheet { Some(ElementId(e.0 - self.sheet)) } else { None })
-            else {
-                continue;
-            };
+            let lower = ElementId(if e.0 >= self.sheet { e.0 - self.sheet } else { e.0 });
             let upper = ElementId(lower.0 + self.sheet);
             let (Ok(pl), Ok(pu)) = (self.body.position(lower), self.body.position(upper)) else { continue };
             let gap = pu[2] - pl[2];
@@ -488,7 +499,11 @@ impl Tissue {
             let _ = self.body.set_position(lower, [pl[0], pl[1], pl[2] + dl]);
             let _ = self.body.set_position(upper, [pu[0], pu[1], pu[2] + du]);
             self.activate(lower.0);
+            self.activate(upper.0);
             fixed += 1;
+        }
+        if fixed > 0 {
+            self.settled = false;
         }
         fixed
     }
