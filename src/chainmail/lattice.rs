@@ -4,10 +4,13 @@
 use super::error::{ChainMailError, finite};
 use super::ids::{ElementId, LinkId};
 
-/// Most elements a lattice may hold: 16 Mi elements, about 1.6 GiB of engine state.
+/// Most elements a lattice may hold: 16 Mi elements, about 5 GiB of engine state.
 pub const MAX_ELEMENTS: usize = 1 << 24;
-/// Approximate bytes of engine state per element (positions, rest, flags, stamps, links, adjacency).
-pub const BYTES_PER_ELEMENT: usize = 100;
+/// Approximate bytes of engine state per element of a sheet: positions and rest (24), two links'
+/// ends, rest offsets, boxes and materials (about 160), adjacency and slot rows (about 70), the
+/// workspace's stamps, old positions, sponsors, candidate lists and relaxation buffer (about 50).
+/// Volumes need about a third more.
+pub const BYTES_PER_ELEMENT: usize = 300;
 
 /// Bit set on an adjacency entry's link when the element owning the entry is the link's `b` end.
 pub(crate) const SIDE_B: u32 = 1 << 31;

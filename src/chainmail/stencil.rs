@@ -11,11 +11,13 @@
 
 use super::body::{Body, FIXED, SlotClass};
 
-/// Elements per block: eight, 24 floats, three AVX or six SSE registers per stream.
+/// Elements per block on wide grids: sixteen, 48 floats, three AVX-512 registers per stream. Grids
+/// of 10 to 17 elements along x take blocks of eight.
 const BLOCK: usize = 16;
 const LANES: usize = 3 * BLOCK;
+const SMALL_LANES: usize = LANES / 2;
 
-type Lanes = [f32; LANES];
+type Lanes<const L: usize = LANES> = [f32; L];
 
 /// What the fast path knows of a grid body; rebuilt when pins, cuts or materials change.
 #[derive(Clone, Debug, Default)]
@@ -164,26 +166,26 @@ impl Stencil {
 
 /// The per-direction inputs of one block: neighbour positions and rest positions, bounds, weights.
 #[derive(Clone, Copy)]
-struct Dir<'a> {
-    p: &'a Lanes,
-    r: &'a Lanes,
-    lo: &'a Lanes,
-    hi: &'a Lanes,
-    w: &'a Lanes,
+struct Dir<'a, const L: usize> {
+    p: &'a Lanes<L>,
+    r: &'a Lanes<L>,
+    lo: &'a Lanes<L>,
+    hi: &'a Lanes<L>,
+    w: &'a Lanes<L>,
 }
 
 /// Relaxes one block of regular elements: `relaxed_row` lane by lane, slots in the same order. With
 /// `UNIFORM` every link weighs the same and `inv` is `OMEGA / Σ w`, computed once.
 #[inline(always)]
-fn block<const W: usize, const UNIFORM: bool>(
-    p: &Lanes,
-    r: &Lanes,
-    dirs: &[Dir<'_>; W],
+fn block<const W: usize, const UNIFORM: bool, const L: usize>(
+    p: &Lanes<L>,
+    r: &Lanes<L>,
+    dirs: &[Dir<'_, L>; W],
     inv: f32,
-    out: &mut Lanes,
-    change: &mut Lanes,
+    out: &mut Lanes<L>,
+    change: &mut Lanes<L>,
 ) {
-    for k in 0..LANES {
+    for k in 0..L {
         let mut acc = 0.0f32;
         let mut wsum = 0.0f32;
         let mut lo = f32::NEG_INFINITY;
@@ -213,39 +215,39 @@ fn block<const W: usize, const UNIFORM: bool>(
 }
 
 /// One stencil sweep as an operation for [`pulp::Arch::dispatch`].
-struct Sweep<'a, const W: usize> {
+struct Sweep<'a, const W: usize, const L: usize> {
     body: &'a Body,
     stencil: &'a Stencil,
     next: &'a mut [[f32; 3]],
 }
 
-impl<const W: usize> pulp::WithSimd for Sweep<'_, W> {
+impl<const W: usize, const L: usize> pulp::WithSimd for Sweep<'_, W, L> {
     type Output = Option<f32>;
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) -> Option<f32> {
-        self.body.sweep_stencil_w::<W>(self.stencil, self.next)
+        self.body.sweep_stencil_w::<W, L>(self.stencil, self.next)
     }
 }
 
 /// The block of a stream starting at `at`. Regular elements have all their neighbours inside the
 /// grid, so blocks are always whole; an empty block (never taken) keeps this free of panics.
-const EMPTY: Lanes = [0.0; LANES];
-
 #[inline(always)]
-fn lanes(s: &[f32], at: usize) -> &Lanes {
-    let block = s.get(at..at + LANES).and_then(|s| s.try_into().ok());
+fn lanes<const L: usize>(s: &[f32], at: usize) -> &Lanes<L> {
+    let block = s.get(at..at + L).and_then(|s| s.try_into().ok());
     debug_assert!(block.is_some(), "block at {at} of {}", s.len());
-    block.unwrap_or(&EMPTY)
+    block.unwrap_or(&const { [0.0; L] })
 }
 
 impl Body {
     /// One Jacobi sweep over every element through the grid fast path; `None` if this body has no
     /// stencil. Writes `next` for every element and returns the largest move.
     pub(crate) fn sweep_stencil(&mut self, next: &mut [[f32; 3]]) -> Option<f32> {
-        if self.stencil.as_ref()?.dims[0] < BLOCK + 2 {
+        let nx = self.stencil.as_ref()?.dims[0];
+        if nx < SMALL_LANES / 3 + 2 {
             return None;
         }
+        let wide = nx >= BLOCK + 2;
         let mut stencil = self.stencil.take()?;
         if !stencil.fresh {
             stencil.refresh(self);
@@ -253,9 +255,11 @@ impl Body {
         // The sweep is compiled once per instruction set and the widest the CPU has is chosen at run
         // time (AVX2 on most x86-64 machines); the arithmetic, and so the result, is the same.
         let arch = pulp::Arch::new();
-        let change = match stencil.offs.len() {
-            4 => arch.dispatch(Sweep::<4> { body: self, stencil: &stencil, next }),
-            6 => arch.dispatch(Sweep::<6> { body: self, stencil: &stencil, next }),
+        let change = match (stencil.offs.len(), wide) {
+            (4, true) => arch.dispatch(Sweep::<4, LANES> { body: self, stencil: &stencil, next }),
+            (6, true) => arch.dispatch(Sweep::<6, LANES> { body: self, stencil: &stencil, next }),
+            (4, false) => arch.dispatch(Sweep::<4, SMALL_LANES> { body: self, stencil: &stencil, next }),
+            (6, false) => arch.dispatch(Sweep::<6, SMALL_LANES> { body: self, stencil: &stencil, next }),
             _ => None,
         };
         self.stencil = Some(stencil);
@@ -263,7 +267,11 @@ impl Body {
     }
 
     #[inline(always)]
-    fn sweep_stencil_w<const W: usize>(&self, st: &Stencil, next: &mut [[f32; 3]]) -> Option<f32> {
+    fn sweep_stencil_w<const W: usize, const L: usize>(
+        &self,
+        st: &Stencil,
+        next: &mut [[f32; 3]],
+    ) -> Option<f32> {
         let [nx, ny, nz] = st.dims;
         let n = self.pos.len();
         if next.len() != n || st.regular.len() != n {
@@ -272,15 +280,16 @@ impl Body {
         let (pos, rest) = (&self.pos[..], &self.lattice.rest[..]);
         let (pf, rf) = (pos.as_flattened(), rest.as_flattened());
         let mut scalar_change = 0.0f32;
-        let mut lane_change = [0.0f32; LANES];
+        let b = L / 3;
+        let mut lane_change = [0.0f32; L];
         let mut generic = |i: usize, next: &mut [[f32; 3]]| {
             let p = pos[i];
             let q = if self.flags[i] & FIXED != 0 { p } else { self.relaxed(i) };
             scalar_change = super::relax::max_change(scalar_change, p, q);
             next[i] = q;
         };
-        let empty: [Lanes; 3] = [EMPTY; 3];
-        let mut row_block = [&empty; W];
+        let zero = const { [0.0f32; L] };
+        let mut row_block = [[&zero; 3]; W];
         let interior = |c: usize, len: usize| len < 2 || (c > 0 && c + 1 < len);
         for k in 0..nz {
             for j in 0..ny {
@@ -295,26 +304,26 @@ impl Body {
                 for (t, block) in row_block.iter_mut().enumerate().skip(2) {
                     let c = if st.slot_axis[t] == 1 { j } else { k };
                     let index = st.row_block_of.get(t - 2).and_then(|of| of.get(c));
-                    *block = index.and_then(|&b| st.row_blocks.get(b as usize)).unwrap_or(&empty);
+                    if let Some(lanes) = index.and_then(|&b| st.row_blocks.get(b as usize)) {
+                        *block = lanes.each_ref().map(|l| l.first_chunk::<L>().unwrap_or(&zero));
+                    }
                 }
                 generic(row, next);
-                // Blocks of eight along the row's interior `1..nx - 1`; the last one is moved back to
+                // Blocks of `b` elements along the row's interior `1..nx - 1`; the last one is moved back to
                 // end at `nx - 1`, overlapping its neighbour (the overlap is computed twice, alike).
                 let mut i = 1;
                 while i < nx - 1 {
-                    let i0 = i.min(nx - 1 - BLOCK);
+                    let i0 = i.min(nx - 1 - b);
                     let e = row + i0;
-                    let flags: Option<[u8; BLOCK]> =
-                        st.regular.get(e..e + BLOCK).and_then(|r| r.try_into().ok());
-                    if flags.map(u128::from_ne_bytes) != Some(u128::from_ne_bytes([1; BLOCK])) {
-                        for e in row + i..row + i0 + BLOCK {
+                    if st.regular.get(e..e + b) != Some(&[1; BLOCK][..b]) {
+                        for e in row + i..row + i0 + b {
                             generic(e, next);
                         }
-                        i = i0 + BLOCK;
+                        i = i0 + b;
                         continue;
                     }
                     let f = 3 * e;
-                    let empty = Dir { p: &EMPTY, r: &EMPTY, lo: &EMPTY, hi: &EMPTY, w: &EMPTY };
+                    let empty = Dir { p: &zero, r: &zero, lo: &zero, hi: &zero, w: &zero };
                     let mut dirs = [empty; W];
                     for (t, dir) in dirs.iter_mut().enumerate() {
                         let g = (f as isize + 3 * st.offs[t]) as usize;
@@ -325,11 +334,11 @@ impl Body {
                                 lanes(&st.x_w[t], 3 * i0),
                             )
                         } else {
-                            (&row_block[t][0], &row_block[t][1], &row_block[t][2])
+                            (row_block[t][0], row_block[t][1], row_block[t][2])
                         };
                         *dir = Dir { p: lanes(pf, g), r: lanes(rf, g), lo, hi, w };
                     }
-                    let out: &mut Lanes = match next.as_flattened_mut().get_mut(f..f + LANES) {
+                    let out: &mut Lanes<L> = match next.as_flattened_mut().get_mut(f..f + L) {
                         Some(s) => match s.try_into() {
                             Ok(s) => s,
                             Err(_) => return None,
@@ -338,10 +347,10 @@ impl Body {
                     };
                     let (p, r) = (lanes(pf, f), lanes(rf, f));
                     match st.uniform_inv {
-                        Some(inv) => block::<W, true>(p, r, &dirs, inv, out, &mut lane_change),
-                        None => block::<W, false>(p, r, &dirs, 0.0, out, &mut lane_change),
+                        Some(inv) => block::<W, true, L>(p, r, &dirs, inv, out, &mut lane_change),
+                        None => block::<W, false, L>(p, r, &dirs, 0.0, out, &mut lane_change),
                     }
-                    i = i0 + BLOCK;
+                    i = i0 + b;
                 }
                 generic(row + nx - 1, next);
             }
