@@ -16,6 +16,14 @@
 //! ## Generic over topology
 //! Links are an explicit list with a compressed adjacency, so the same chain reaction and relaxation run
 //! on grids (built here), wrapped grids (cylinders, spheres) and, later, triangle and tetrahedral meshes.
+//! The chain reaction keeps one candidate list per adjacency slot (Gibson's per-direction lists), so on
+//! grids it walks memory row by row.
+//!
+//! ## Grid fast paths
+//! Grids keep a stencil (`stencil.rs`) beside the generic rows: interior elements find their chain-reaction
+//! neighbours by offset, and whole-body relaxation sweeps relax runs of regular elements in SIMD blocks.
+//! Both give the generic path's result bit for bit (`tests/chainmail_reference.rs` checks it); anything
+//! irregular (borders, seams, cuts, pins, other materials) takes the generic path.
 
 mod body;
 mod deform;
