@@ -87,40 +87,49 @@ impl Stencil {
     /// Finds the common class of each slot by grid coordinate (Boyer-Moore majority vote), marks the
     /// regular elements, and lays out the x streams.
     pub(crate) fn refresh(&mut self, body: &Body) {
-        let [nx, ny, _] = self.dims;
+        let [nx, ny, nz] = self.dims;
         let n = body.pos.len();
         let w = body.width;
-        let coord = |i: usize, axis: usize| match axis {
-            0 => i % nx,
-            1 => (i / nx) % ny,
-            _ => i / (nx * ny),
-        };
-        for (t, pattern) in self.pattern.iter_mut().enumerate() {
-            let axis = self.slot_axis[t];
-            let mut count = vec![0u32; pattern.len()];
-            for i in 0..n {
-                let c = coord(i, axis);
-                let class = body.slot_class[i * w + t];
-                if count[c] == 0 {
-                    pattern[c] = class;
-                    count[c] = 1;
-                } else if pattern[c] == class {
-                    count[c] += 1;
-                } else {
-                    count[c] -= 1;
+        // Element `i` sits at grid coordinates `at`; slot `t` runs along axis `slot_axis[t]`.
+        let mut count: Vec<Vec<u32>> = self.pattern.iter().map(|p| vec![0; p.len()]).collect();
+        let mut i = 0;
+        for k in 0..nz {
+            for j in 0..ny {
+                for x in 0..nx {
+                    let at = [x, j, k];
+                    for t in 0..w {
+                        let c = at[self.slot_axis[t]];
+                        let class = body.slot_class[i * w + t];
+                        let (pattern, count) = (&mut self.pattern[t][c], &mut count[t][c]);
+                        if *count == 0 {
+                            *pattern = class;
+                            *count = 1;
+                        } else if *pattern == class {
+                            *count += 1;
+                        } else {
+                            *count -= 1;
+                        }
+                    }
+                    i += 1;
                 }
             }
         }
         self.regular.resize(n, 0);
-        for i in 0..n {
-            let row = &body.slot_class[i * w..(i + 1) * w];
-            let ok = self.interior[i] == 1
-                && body.flags[i] & FIXED == 0
-                && (0..w).all(|t| {
-                    let class = self.pattern[t][coord(i, self.slot_axis[t])];
-                    row[t] == class && class != 0
-                });
-            self.regular[i] = ok as u8;
+        let mut i = 0;
+        for k in 0..nz {
+            for j in 0..ny {
+                for x in 0..nx {
+                    let at = [x, j, k];
+                    let row = &body.slot_class[i * w..(i + 1) * w];
+                    let mut ok = self.interior[i] == 1 && body.flags[i] & FIXED == 0;
+                    for (t, &class) in row.iter().enumerate() {
+                        let expected = self.pattern[t][at[self.slot_axis[t]]];
+                        ok &= class == expected && class != 0;
+                    }
+                    self.regular[i] = ok as u8;
+                    i += 1;
+                }
+            }
         }
         for t in 0..2 {
             let (lo, hi, wt) = (&mut self.x_lo[t], &mut self.x_hi[t], &mut self.x_w[t]);
