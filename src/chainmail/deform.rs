@@ -300,8 +300,30 @@ impl Body {
             let mut progressed = false;
             for t in 0..lists_used {
                 let list = t * n;
+                // Lists across rows (y and z on grids) hold runs of consecutive interior sponsors whose
+                // candidates are consecutive too and independent of each other: such a run is moved
+                // as one (see `batch`), with the same moves, order, sponsors and list entries.
+                let across = offs.get(t).filter(|o| o.unsigned_abs() > 1).copied();
                 while head[t] < tail[t] {
                     progressed = true;
+                    if let Some(o) = across {
+                        let run = Run { list, head: head[t], tail: tail[t], t, o, g, width };
+                        let done = batch::<MASK>(
+                            &run,
+                            Slices { nbrs, classes, slot_class, flags, interior, offs },
+                            pos,
+                            stamp,
+                            old,
+                            sponsor,
+                            moved,
+                            lists,
+                            tail,
+                        );
+                        if done > 0 {
+                            head[t] += done;
+                            continue;
+                        }
+                    }
                     let s = lists[list + head[t]] as usize;
                     head[t] += 1;
                     let c = match (interior.get(s), offs.get(t)) {
@@ -367,6 +389,129 @@ impl Body {
         }
         true
     }
+}
+
+/// Where a run of a candidate list starts, for [`batch`].
+struct Run {
+    /// Start of the list in the workspace's list buffer.
+    list: usize,
+    /// First unprocessed entry and end of the list.
+    head: usize,
+    tail: usize,
+    /// The list's slot, its grid offset and the generation.
+    t: usize,
+    o: isize,
+    g: u32,
+    width: usize,
+}
+
+/// The body's read-only arrays the chain reaction uses.
+#[derive(Clone, Copy)]
+struct Slices<'a> {
+    nbrs: &'a [u32],
+    classes: &'a [super::body::SlotClass],
+    slot_class: &'a [u32],
+    flags: &'a [u8],
+    interior: &'a [u8],
+    offs: &'a [isize],
+}
+
+/// Longest run moved at once.
+const RUN: usize = 64;
+
+/// Moves a run of candidates at once: list entries `s, s + 1, ...` (interior sponsors), whose
+/// candidates `s + o, s + o + 1, ...` lie in another row, are free, have not moved and must move.
+/// Processed one by one they would not affect each other, so the run is checked first, then its moves
+/// are written in bulk. List entries are written as one by one, except those whose neighbour is in
+/// the run: that neighbour has moved by the time the entry would be read, so the entry could only be
+/// skipped. Returns how many entries were consumed (0: none qualified, take the one-by-one path).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn batch<const MASK: u8>(
+    run: &Run,
+    b: Slices<'_>,
+    pos: &mut [[f32; 3]],
+    stamp: &mut [u32],
+    old: &mut [[f32; 3]],
+    sponsor: &mut [u32],
+    moved: &mut Vec<u32>,
+    lists: &mut [u32],
+    tail: &mut [usize],
+) -> usize {
+    let &Run { list, head, tail: end, t, o, g, width } = run;
+    let n = pos.len();
+    let s0 = lists[list + head] as usize;
+    if b.interior.get(s0) != Some(&1) {
+        return 0;
+    }
+    let c0 = s0.wrapping_add_signed(o);
+    let mut q = [[0.0f32; 3]; RUN];
+    let mut m = 0;
+    while m < RUN && head + m < end {
+        let s = s0 + m;
+        let c = c0.wrapping_add(m);
+        if lists[list + head + m] as usize != s
+            || b.interior.get(s) != Some(&1)
+            || c >= n
+            || stamp[c] == g
+            || b.flags[c] & FIXED != 0
+        {
+            break;
+        }
+        let ps = pos[s];
+        let [elo, ehi] = b.classes[b.slot_class[s * width + t] as usize].bounds;
+        let blo = [ps[0] - ehi[0], ps[1] - ehi[1], ps[2] - ehi[2]];
+        let bhi = [ps[0] - elo[0], ps[1] - elo[1], ps[2] - elo[2]];
+        let pc = pos[c];
+        q[m] = clamp_masked::<MASK>(pc, blo, bhi);
+        if q[m] == pc {
+            break;
+        }
+        m += 1;
+    }
+    if m < 2 {
+        return 0;
+    }
+    let run = c0..c0 + m;
+    old[run.clone()].copy_from_slice(&pos[run.clone()]);
+    pos[run.clone()].copy_from_slice(&q[..m]);
+    stamp[run.clone()].fill(g);
+    for (k, sp) in sponsor[run.clone()].iter_mut().enumerate() {
+        *sp = (s0 + k) as u32;
+    }
+    moved.extend(run.clone().map(|c| c as u32));
+    let all_interior = b.interior.get(run.clone()).is_some_and(|r| r.iter().all(|&i| i == 1));
+    for (u, tail) in tail.iter_mut().enumerate().take(width) {
+        let mut push = |c: usize, d: usize| {
+            if !run.contains(&d) && stamp.get(d) != Some(&g) {
+                lists[u * n + *tail] = c as u32;
+                *tail += 1;
+            }
+        };
+        match b.offs.get(u) {
+            // Along the run only its ends can have a neighbour outside it.
+            Some(&o) if all_interior && o.unsigned_abs() == 1 => {
+                for c in [c0, c0 + m - 1] {
+                    push(c, c.wrapping_add_signed(o));
+                }
+            }
+            Some(&o) if all_interior => {
+                for c in run.clone() {
+                    push(c, c.wrapping_add_signed(o));
+                }
+            }
+            _ => {
+                for c in run.clone() {
+                    let d = match (b.interior.get(c), b.offs.get(u)) {
+                        (Some(1), Some(&o)) => c.wrapping_add_signed(o),
+                        _ => b.nbrs[c * width + u] as usize,
+                    };
+                    push(c, d);
+                }
+            }
+        }
+    }
+    m
 }
 
 const fn mask_of<const MASK: u8>() -> [bool; 3] {
