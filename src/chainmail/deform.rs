@@ -295,6 +295,7 @@ impl Body {
             tail[t] = 1;
         }
 
+        let mut run_positions = [[0.0f32; 3]; RUN];
         let mut blocked = false;
         'reaction: loop {
             let mut progressed = false;
@@ -318,6 +319,7 @@ impl Body {
                             moved,
                             lists,
                             tail,
+                            &mut run_positions,
                         );
                         if done > 0 {
                             head[t] += done;
@@ -424,7 +426,8 @@ const RUN: usize = 64;
 /// Processed one by one they would not affect each other, so the run is checked first, then its moves
 /// are written in bulk. List entries are written as one by one, except those whose neighbour is in
 /// the run: that neighbour has moved by the time the entry would be read, so the entry could only be
-/// skipped. Returns how many entries were consumed (0: none qualified, take the one-by-one path).
+/// skipped. Returns how many entries were consumed (0: take the one-by-one path for the next entry;
+/// 1 with nothing written: its candidate had moved already, as the one-by-one path would find).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn batch<const MASK: u8>(
@@ -437,6 +440,7 @@ fn batch<const MASK: u8>(
     moved: &mut Vec<u32>,
     lists: &mut [u32],
     tail: &mut [usize],
+    q: &mut [[f32; 3]; RUN],
 ) -> usize {
     let &Run { list, head, tail: end, t, o, g, width } = run;
     let n = pos.len();
@@ -445,7 +449,10 @@ fn batch<const MASK: u8>(
         return 0;
     }
     let c0 = s0.wrapping_add_signed(o);
-    let mut q = [[0.0f32; 3]; RUN];
+    // The first candidate has moved already: the entry is done with, as one by one.
+    if stamp.get(c0) == Some(&g) {
+        return 1;
+    }
     let mut m = 0;
     while m < RUN && head + m < end {
         let s = s0 + m;
