@@ -288,18 +288,35 @@ fn lattice(c: &Case) -> Lattice {
 
 fn build(c: &Case) -> Body {
     let (s, m, sh) = c.material;
-    let mut body = Body::new(lattice(c), Material::relative(s, m, sh)).expect("body");
+    let dressing =
+        Dressing { stiffness: 3.0, region_x: 0.015, pins: &c.pins, holds: &c.holds, cuts: &c.cuts };
+    dress(lattice(c), Material::relative(s, m, sh), &dressing)
+}
+
+/// What a test body carries beyond its lattice and first material: a stiffer material below
+/// `region_x`, pins, holds and cuts (ids taken modulo the element and link counts).
+struct Dressing<'a> {
+    stiffness: f32,
+    region_x: f32,
+    pins: &'a [u32],
+    holds: &'a [u32],
+    cuts: &'a [u32],
+}
+
+fn dress(lattice: Lattice, material: Material, d: &Dressing<'_>) -> Body {
+    let mut body = Body::new(lattice, material).expect("body");
     let mut stiff = Material::relative(1.05, 0.95, 0.05);
-    stiff.stiffness = 3.0;
+    stiff.stiffness = d.stiffness;
     let stiff = body.add_material(stiff).expect("material");
-    body.set_material_where(stiff, |a, b| a[0] < 0.015 && b[0] < 0.015).expect("region");
-    for &p in &c.pins {
-        body.set_pinned(ElementId(p), true).expect("pin");
+    body.set_material_where(stiff, |a, b| a[0] < d.region_x && b[0] < d.region_x).expect("region");
+    let n = body.element_count() as u32;
+    for &p in d.pins {
+        body.set_pinned(ElementId(p % n), true).expect("pin");
     }
-    for &p in &c.holds {
-        body.set_held(ElementId(p), true).expect("hold");
+    for &p in d.holds {
+        body.set_held(ElementId(p % n), true).expect("hold");
     }
-    for &l in &c.cuts {
+    for &l in d.cuts {
         let l = l % body.link_count().max(1) as u32;
         body.break_link(LinkId(l), BreakReason::Cut).expect("cut");
     }
@@ -385,26 +402,11 @@ proptest! {
         }
         let grid = Lattice::grid(&spec).expect("grid");
         let plain = without_grid(&grid);
-        let mut bodies = [grid, plain].map(|lattice| {
-            let mut body = Body::new(lattice, Material::relative(1.2, 0.8, 0.3)).expect("body");
-            // One stiffness (the blocks' division-free path) or two.
-            let mut stiff = Material::relative(1.05, 0.95, 0.05);
-            stiff.stiffness = if one_stiffness { 1.0 } else { 3.0 };
-            let stiff = body.add_material(stiff).expect("material");
-            body.set_material_where(stiff, |a, b| a[0] < 0.035 && b[0] < 0.035).expect("region");
-            let n = body.element_count() as u32;
-            for &p in &pins {
-                body.set_pinned(ElementId(p % n), true).expect("pin");
-            }
-            for &p in &holds {
-                body.set_held(ElementId(p % n), true).expect("hold");
-            }
-            for &l in &cuts {
-                let l = l % body.link_count() as u32;
-                body.break_link(LinkId(l), BreakReason::Cut).expect("cut");
-            }
-            body
-        });
+        // One stiffness (the blocks' division-free path) or two.
+        let stiffness = if one_stiffness { 1.0 } else { 3.0 };
+        let dressing = Dressing { stiffness, region_x: 0.035, pins: &pins, holds: &holds, cuts: &cuts };
+        let mut bodies =
+            [grid, plain].map(|lattice| dress(lattice, Material::relative(1.2, 0.8, 0.3), &dressing));
         let n = bodies[0].element_count() as u32;
         for &(e, d) in &moves {
             let e = ElementId(e % n);

@@ -275,12 +275,12 @@ impl Body {
             &mut ws.moved,
             &mut ws.lists[..n * width],
         );
-        // Interior grid elements find their neighbours by offset, which keeps a load off the chain of
-        // dependent loads (list entry, neighbour, its stamp); others read their adjacency row.
+        // Interior grid elements find their neighbours by offset (`Slices::neighbour`).
         let (offs, interior): (&[isize], &[u8]) = match &self.stencil {
             Some(st) if st.interior.len() == n => (&st.offs, &st.interior[..n]),
             _ => (&[], &[]),
         };
+        let b = Slices { nbrs, classes, slot_class, flags, interior, offs, width };
         let (head, tail) = (&mut heads[..width], &mut tails[..width]);
         head.fill(0);
         let lists_used = width;
@@ -308,10 +308,10 @@ impl Body {
                 while head[t] < tail[t] {
                     progressed = true;
                     if let Some(o) = across {
-                        let run = Run { list, head: head[t], tail: tail[t], t, o, g, width };
+                        let run = Run { list, head: head[t], tail: tail[t], t, o, g };
                         let done = batch::<MASK>(
                             &run,
-                            Slices { nbrs, classes, slot_class, flags, interior, offs },
+                            b,
                             pos,
                             stamp,
                             old,
@@ -328,10 +328,7 @@ impl Body {
                     }
                     let s = lists[list + head[t]] as usize;
                     head[t] += 1;
-                    let c = match (interior.get(s), offs.get(t)) {
-                        (Some(1), Some(&o)) => s.wrapping_add_signed(o),
-                        _ => nbrs[s * width + t] as usize,
-                    };
+                    let c = b.neighbour(s, t);
                     let class = slot_class[s * width + t];
                     // Stamped: moved already (padding slots point at `s` itself).
                     if stamp[c] == g {
@@ -368,13 +365,8 @@ impl Body {
                     sponsor[c] = s as u32;
                     moved.push(c as u32);
                     // Gibson: sponsor only neighbours that have not moved (the sponsor among them).
-                    let at_offset = interior.get(c) == Some(&1);
                     for u in 0..lists_used {
-                        let d = match (at_offset, offs.get(u)) {
-                            (true, Some(&o)) => c.wrapping_add_signed(o),
-                            _ => nbrs[c * width + u] as usize,
-                        };
-                        if stamp.get(d) != Some(&g) {
+                        if stamp.get(b.neighbour(c, u)) != Some(&g) {
                             lists[u * n + tail[u]] = c as u32;
                             tail[u] += 1;
                         }
@@ -404,7 +396,6 @@ struct Run {
     t: usize,
     o: isize,
     g: u32,
-    width: usize,
 }
 
 /// The body's read-only arrays the chain reaction uses.
@@ -416,6 +407,20 @@ struct Slices<'a> {
     flags: &'a [u8],
     interior: &'a [u8],
     offs: &'a [isize],
+    width: usize,
+}
+
+impl Slices<'_> {
+    /// The neighbour of element `e` through adjacency slot `u`: by grid offset for interior elements,
+    /// which keeps a load off the chain of dependent loads (list entry, neighbour, its stamp), else
+    /// from the adjacency row.
+    #[inline(always)]
+    fn neighbour(&self, e: usize, u: usize) -> usize {
+        match (self.interior.get(e), self.offs.get(u)) {
+            (Some(1), Some(&o)) => e.wrapping_add_signed(o),
+            _ => self.nbrs[e * self.width + u] as usize,
+        }
+    }
 }
 
 /// Longest run moved at once.
@@ -442,7 +447,8 @@ fn batch<const MASK: u8>(
     tail: &mut [usize],
     q: &mut [[f32; 3]; RUN],
 ) -> usize {
-    let &Run { list, head, tail: end, t, o, g, width } = run;
+    let &Run { list, head, tail: end, t, o, g } = run;
+    let width = b.width;
     let n = pos.len();
     let s0 = lists[list + head] as usize;
     if b.interior.get(s0) != Some(&1) {
@@ -509,11 +515,7 @@ fn batch<const MASK: u8>(
             }
             _ => {
                 for c in run.clone() {
-                    let d = match (b.interior.get(c), b.offs.get(u)) {
-                        (Some(1), Some(&o)) => c.wrapping_add_signed(o),
-                        _ => b.nbrs[c * width + u] as usize,
-                    };
-                    push(c, d);
+                    push(c, b.neighbour(c, u));
                 }
             }
         }

@@ -94,6 +94,12 @@ impl Body {
         report
     }
 
+    /// The relaxed position of element `i`: where it is if pinned or held, else [`Body::relaxed`].
+    #[inline(always)]
+    pub(crate) fn relaxed_unless_fixed(&self, i: usize) -> [f32; 3] {
+        if self.flags[i] & FIXED != 0 { self.pos[i] } else { self.relaxed(i) }
+    }
+
     /// The relaxed position of element `i` (assumed free): a damped Jacobi step toward the weighted mean
     /// displacement of its neighbours, shortened per coordinate where it would leave the constraint boxes
     /// of its intact links (the box of each link taken at the neighbour's current position). A step is
@@ -162,7 +168,7 @@ impl Body {
                     continue;
                 }
                 let p = body.pos[i];
-                let q = if body.flags[i] & FIXED != 0 { p } else { body.relaxed(i) };
+                let q = body.relaxed_unless_fixed(i);
                 change = max_change(change, p, q);
                 ws.next[i] = q;
             }
@@ -180,7 +186,7 @@ impl Body {
         for &i in &ws.moved {
             let i = i as usize;
             let p = self.pos[i];
-            let q = if self.flags[i] & FIXED != 0 { p } else { self.relaxed(i) };
+            let q = self.relaxed_unless_fixed(i);
             change = max_change(change, p, q);
             ws.next[i] = q;
         }

@@ -293,7 +293,7 @@ impl Body {
         let mut lane_change = [0.0f32; L];
         let mut generic = |i: usize, next: &mut [[f32; 3]]| {
             let p = pos[i];
-            let q = if self.flags[i] & FIXED != 0 { p } else { self.relaxed(i) };
+            let q = self.relaxed_unless_fixed(i);
             scalar_change = super::relax::max_change(scalar_change, p, q);
             next[i] = q;
         };
