@@ -121,7 +121,8 @@ impl Body {
     }
 
     fn sweep_all(&mut self, ws: &mut Workspace) -> f32 {
-        // Grids take the stencil path: the same result, bit for bit, in blocks the compiler vectorises.
+        // Grids take the stencil path: vectors and bands of rows on every thread, the same result up
+        // to rounding (regular elements skip the rest positions, whose offsets cancel).
         if let Some(change) = self.sweep_stencil(&mut ws.next) {
             std::mem::swap(&mut self.pos, &mut ws.next);
             return change;
@@ -209,8 +210,9 @@ pub(crate) fn max_change(change: f32, p: [f32; 3], q: [f32; 3]) -> f32 {
 }
 
 /// The relaxed position of an element at `p` (rest `r`) whose adjacency row is `nbrs` and
-/// `slot_class` (boxes on `p[owner] - p[nbr]` and weights in `classes`). Broken links and padding slots have weight 0 and an infinite
-/// box: they add exactly nothing (the sums start at +0, so adding ±0 leaves them bit for bit).
+/// `slot_class` (boxes on `p[owner] - p[nbr]` and weights in `classes`). Broken links and padding
+/// slots have weight 0 and an infinite box: they add exactly nothing (the sums start at +0, so adding
+/// ±0 leaves them bit for bit).
 #[inline(always)]
 fn relaxed_row(
     pos: &[[f32; 3]],
@@ -222,14 +224,28 @@ fn relaxed_row(
     slot_class: &[u32],
 ) -> [f32; 3] {
     let rest = &rest[..pos.len()];
+    relaxed_with(pos, p, r, nbrs, slot_class, classes, |_, j| rest[j])
+}
+
+/// [`relaxed_row`] with the neighbours' rest positions given by `rest_of(slot, neighbour)`.
+#[inline(always)]
+pub(crate) fn relaxed_with(
+    pos: &[[f32; 3]],
+    p: [f32; 3],
+    r: [f32; 3],
+    nbrs: &[u32],
+    slot_class: &[u32],
+    classes: &[SlotClass],
+    rest_of: impl Fn(usize, usize) -> [f32; 3],
+) -> [f32; 3] {
     let mut acc = [0.0f32; 3];
     let mut wsum = 0.0f32;
     let mut lo = [f32::NEG_INFINITY; 3];
     let mut hi = [f32::INFINITY; 3];
-    for (&j, &class) in nbrs.iter().zip(slot_class) {
+    for (t, (&j, &class)) in nbrs.iter().zip(slot_class).enumerate() {
         let SlotClass { bounds: [blo, bhi], w } = classes[class as usize];
         let j = j as usize;
-        let (pj, rj) = (pos[j], rest[j]);
+        let (pj, rj) = (pos[j], rest_of(t, j));
         for c in 0..3 {
             acc[c] += w * (pj[c] - rj[c]);
             // The slot bounds `p[i] - p[j]`: `p[i]` must lie in `[pj + blo, pj + bhi]`.

@@ -1,23 +1,33 @@
 //! The grid fast path of a whole-body relaxation sweep.
 //!
 //! On a grid lattice most elements are *regular*: free, with every neighbour at a fixed offset in the
-//! flat arrays (`i ± 1`, `i ± nx`, `i ± nx·ny`, in the adjacency's slot order) and every link of the
-//! class its direction has at that grid coordinate (on a rectilinear grid of one material an x-link's
-//! box depends only on its x coordinate, a y-link's only on y, a z-link's only on z). Runs of eight
-//! regular elements along x are relaxed as one block over flat `f32` streams, which the compiler turns
-//! into SIMD: the same arithmetic, in the same order, as the generic row loop, so the result is bit
-//! for bit the same. Everything else (borders, wrap seams, cut links, pins, held elements, other
-//! materials, curvilinear grids) goes through the generic row loop.
+//! flat arrays (`i ± 1`, `i ± nx`, `i ± nx·ny`, in the adjacency's slot order), links of one weight
+//! whose boxes depend only on the row (a y-link's on its y coordinate, a z-link's on z, x-links the
+//! same along the whole grid), and rest offsets to its neighbours that cancel (a uniform grid, up to
+//! the rounding of the rest coordinates). For such an element the damped Jacobi target needs no rest
+//! positions: it is `(1 - ω) p + ω · mean(p_j)`, and its constraint boxes are the row's. Runs of
+//! regular elements are relaxed a vector at a time with explicit SIMD (`pulp`, which picks AVX-512,
+//! AVX2 or plain floats at run time). Everything else (borders, wrap seams, cut links, pins, held
+//! elements, other materials or stiffnesses, graded or curvilinear grids) goes through the generic
+//! row loop; the two agree up to rounding.
+//!
+//! On a uniform grid the rest length `c[i + 1] - c[i]` varies in its last bits from column to column
+//! (the coordinates are rounded), and with it the boxes of a relative material. x-links whose boxes
+//! agree with the most common one to within that rounding count as the same: the sweep clamps to the
+//! common box, a few units in the last place of the coordinates off the link's own.
+//!
+//! The sweep reads the old positions and writes the new ones to a second array (a Jacobi sweep), so
+//! bands of slabs (rows of a sheet, layers of a volume) can be computed on several threads at once
+//! with the same result. Regular elements read no rest positions.
 
 use super::body::{Body, FIXED, SlotClass};
+use super::relax::{OMEGA, relaxed_with};
 
-/// Elements per block on wide grids: sixteen, 48 floats, three AVX-512 registers per stream. Grids
-/// of 10 to 17 elements along x take blocks of eight.
-const BLOCK: usize = 16;
-const LANES: usize = 3 * BLOCK;
-const SMALL_LANES: usize = LANES / 2;
+/// The widest vector the sweep uses: sixteen floats (AVX-512). Bounds are kept as lanes of three
+/// floats per element, long enough for three such vectors.
+const MAX_LANES: usize = 16;
+type Lanes = [f32; 3 * MAX_LANES];
 
-type Lanes<const L: usize = LANES> = [f32; L];
 
 /// What the fast path knows of a grid body; rebuilt when pins, cuts or materials change.
 #[derive(Clone, Debug, Default)]
@@ -29,27 +39,66 @@ pub(crate) struct Stencil {
     /// 1 where an element's slots hold exactly the neighbours at `offs` (a fact of the lattice: not a
     /// border, not a wrap seam). The chain reaction finds those neighbours by adding the offset.
     pub(crate) interior: Vec<u8>,
+    /// 1 where the rest offsets to an element's neighbours sum to zero up to rounding.
+    balanced: Vec<u8>,
+    /// Elements per slab (a row of a sheet, a layer of a volume): the unit of parallel work.
+    slab: usize,
+    /// How far (relative) boxes may differ and still count as the same: the rounding of the rest
+    /// coordinates, relative to the shortest link, which a relative material's boxes inherit.
+    same_box: f32,
     /// Grid axis of each slot.
     slot_axis: Vec<usize>,
-    /// For each slot, the class a regular element has there, by grid coordinate along the slot's
-    /// axis (the class most elements have).
+    /// For each slot, the class most elements have there, by grid coordinate along the slot's axis.
     pattern: Vec<Vec<u32>>,
-    /// 1 where an element is regular.
+    /// For the x slots: the class most columns have, and for each column whether its class has the
+    /// same box and weight.
+    x_class: [u32; 2],
+    x_column: Vec<u8>,
+    /// 1 where an element is regular, and 1 for each row whose interior `1..nx - 1` is.
     regular: Vec<u8>,
-    /// For the x slots (0 and 1): bounds and weight of each element's link, as flat streams of
-    /// three floats per element (lo, hi, w per slot).
-    x_lo: [Vec<f32>; 2],
-    x_hi: [Vec<f32>; 2],
-    x_w: [Vec<f32>; 2],
-    /// For the y and z slots, whose class is constant along a row: the blocks of bounds and weight
-    /// (lo, hi, w) of each class the patterns use, and for each slot and coordinate which one.
-    row_blocks: Vec<[Lanes; 3]>,
+    regular_rows: Vec<u8>,
+    /// The bounds (lo, hi) of each class regular elements use, as lanes of three floats per element,
+    /// and for each slot and grid coordinate along its axis which (x slots: one entry, `x_class`).
+    row_blocks: Vec<[Lanes; 2]>,
     row_block_of: Vec<Vec<u32>>,
-    /// `OMEGA / Σ w` of every regular element when all their links weigh the same (one stiffness, the
-    /// usual case), computed as the generic path computes it: blocks then skip the division.
-    uniform_inv: Option<f32>,
-    /// Whether `regular` and the streams describe the body as it is.
+    /// The two end elements of every row (x = 0 and x = nx - 1), in row order.
+    edges: Vec<Edge>,
+    /// Whether the tables describe the body as it is.
     pub(crate) fresh: bool,
+}
+
+/// An element at the end of a row, with its adjacency row and the rest positions the generic
+/// relaxation reads, gathered so that the sweep reads them in order: scattered through the body's
+/// arrays, two per row, each would be a cache miss costing as much as the row's other elements.
+#[derive(Clone, Copy, Debug, Default)]
+struct Edge {
+    nbr: [u32; 6],
+    class: [u32; 6],
+    nbr_rest: [[f32; 3]; 6],
+    rest: [f32; 3],
+    fixed: bool,
+}
+
+/// Boyer-Moore majority vote: the value most of `values` have, if any has more than half.
+fn majority(values: impl Iterator<Item = u32>) -> u32 {
+    let (mut value, mut count) = (0u32, 0u32);
+    for v in values {
+        if count == 0 {
+            (value, count) = (v, 1);
+        } else if v == value {
+            count += 1;
+        } else {
+            count -= 1;
+        }
+    }
+    value
+}
+
+/// Whether two classes have boxes equal to within `tolerance` (relative).
+fn same_box(a: &SlotClass, b: &SlotClass, tolerance: f32) -> bool {
+    let close = |x: f32, y: f32| x == y || (x - y).abs() <= tolerance * x.abs().max(y.abs());
+    let (a, b) = (a.bounds.as_flattened(), b.bounds.as_flattened());
+    a.iter().zip(b).all(|(&x, &y)| close(x, y))
 }
 
 impl Stencil {
@@ -57,7 +106,7 @@ impl Stencil {
     /// than one element, x first), else `None`.
     pub(crate) fn for_body(body: &Body) -> Option<Self> {
         let dims = body.lattice.dims?;
-        let [nx, ny, _] = dims;
+        let [nx, ny, nz] = dims;
         let strides = [1isize, nx as isize, (nx * ny) as isize];
         let mut offs = Vec::new();
         let mut slot_axis = Vec::new();
@@ -72,24 +121,57 @@ impl Stencil {
         }
         let w = body.width;
         let n = body.pos.len();
-        let interior = (0..n)
-            .map(|i| {
-                let row = &body.slot_nbr[i * w..(i + 1) * w];
+        let rows = body.slot_nbr.chunks_exact(w);
+        let interior = rows
+            .clone()
+            .enumerate()
+            .map(|(i, row)| {
                 let at = |t: usize| i as isize + offs[t];
                 row.iter().enumerate().all(|(t, &j)| (0..n as isize).contains(&at(t)) && j as isize == at(t))
                     as u8
             })
             .collect();
+        let rest = &body.lattice.rest;
+        let balanced = rows
+            .clone()
+            .enumerate()
+            .map(|(i, row)| {
+                (0..3).all(|c| {
+                    let ri = rest[i][c] as f64;
+                    let (sum, size) = row.iter().fold((0.0f64, 0.0f64), |(s, m), &j| {
+                        let rj = rest[j as usize][c] as f64;
+                        (s + (rj - ri), m + rj.abs() + ri.abs())
+                    });
+                    sum.abs() <= 4.0 * f32::EPSILON as f64 * size
+                }) as u8
+            })
+            .collect();
+        let slab = if nz > 1 { nx * ny } else { nx };
         let pattern = slot_axis.iter().map(|&a| vec![0; dims[a]]).collect();
-        Some(Self { dims, offs, interior, slot_axis, pattern, ..Self::default() })
+        let largest = rest.iter().flatten().fold(0.0f32, |m, &c| m.max(c.abs()));
+        let offsets = body.lattice.rest_offset.iter();
+        let shortest = offsets.map(|o| o.iter().fold(0.0f32, |m, &c| m.max(c.abs()))).fold(f32::INFINITY, f32::min);
+        let same_box = 8.0 * f32::EPSILON * (1.0 + largest / shortest);
+        Some(Self {
+            dims,
+            offs,
+            interior,
+            balanced,
+            slab,
+            same_box,
+            slot_axis,
+            pattern,
+            ..Self::default()
+        })
     }
 
-    /// Finds the common class of each slot by grid coordinate (Boyer-Moore majority vote), marks the
-    /// regular elements, and lays out the x streams.
+    /// Finds the common class of each slot by grid coordinate, marks the regular elements, and lays
+    /// out the bounds and the row ends.
     pub(crate) fn refresh(&mut self, body: &Body) {
         let [nx, ny, nz] = self.dims;
         let n = body.pos.len();
         let w = body.width;
+        let classes = &body.classes;
         // Element `i` sits at grid coordinates `at`; slot `t` runs along axis `slot_axis[t]`.
         let mut count: Vec<Vec<u32>> = self.pattern.iter().map(|p| vec![0; p.len()]).collect();
         let mut i = 0;
@@ -102,8 +184,7 @@ impl Stencil {
                         let class = body.slot_class[i * w + t];
                         let (pattern, count) = (&mut self.pattern[t][c], &mut count[t][c]);
                         if *count == 0 {
-                            *pattern = class;
-                            *count = 1;
+                            (*pattern, *count) = (class, 1);
                         } else if *pattern == class {
                             *count += 1;
                         } else {
@@ -114,6 +195,29 @@ impl Stencil {
                 }
             }
         }
+        let interior_columns = 1..nx.saturating_sub(1);
+        for t in 0..2 {
+            let columns = self.pattern[t].get(interior_columns.clone()).unwrap_or_default();
+            self.x_class[t] = majority(columns.iter().copied());
+        }
+        let x_classes = self.x_class.map(|c| classes[c as usize]);
+        self.x_column = (0..nx)
+            .map(|x| {
+                (0..2).all(|t| {
+                    let c = classes[self.pattern[t][x] as usize];
+                    c.w.to_bits() == x_classes[t].w.to_bits() && same_box(&c, &x_classes[t], self.same_box)
+                }) as u8
+            })
+            .collect();
+        // One weight for every class a regular element can have?
+        let mut weights = self.pattern.iter().skip(2).flatten().chain(&self.x_class).filter(|&&c| c != 0);
+        let one_weight = match weights.next() {
+            Some(&c) => {
+                let w = classes[c as usize].w;
+                w > 0.0 && weights.all(|&c| classes[c as usize].w.to_bits() == w.to_bits())
+            }
+            None => false,
+        };
         self.regular.resize(n, 0);
         let mut i = 0;
         for k in 0..nz {
@@ -121,250 +225,335 @@ impl Stencil {
                 for x in 0..nx {
                     let at = [x, j, k];
                     let row = &body.slot_class[i * w..(i + 1) * w];
-                    let mut ok = self.interior[i] == 1 && body.flags[i] & FIXED == 0;
+                    let mut ok = one_weight
+                        && self.x_column[x] == 1
+                        && self.interior[i] == 1
+                        && self.balanced[i] == 1
+                        && body.flags[i] & FIXED == 0;
                     for (t, &class) in row.iter().enumerate() {
-                        let expected = self.pattern[t][at[self.slot_axis[t]]];
-                        ok &= class == expected && class != 0;
+                        ok &= class == self.pattern[t][at[self.slot_axis[t]]] && class != 0;
                     }
                     self.regular[i] = ok as u8;
                     i += 1;
                 }
             }
         }
-        for t in 0..2 {
-            let (lo, hi, wt) = (&mut self.x_lo[t], &mut self.x_hi[t], &mut self.x_w[t]);
-            lo.clear();
-            hi.clear();
-            wt.clear();
-            for &class in &self.pattern[t] {
-                let SlotClass { bounds: [l, h], w } = body.classes[class as usize];
-                lo.extend(l);
-                hi.extend(h);
-                wt.extend([w; 3]);
-            }
-        }
+        let whole = |r: &[u8]| r.get(interior_columns.clone()).is_some_and(|r| r.iter().all(|&r| r == 1));
+        self.regular_rows.clear();
+        self.regular_rows.extend(self.regular.chunks_exact(nx).map(|r| whole(r) as u8));
         let mut block_of_class = std::collections::HashMap::new();
         self.row_blocks.clear();
         self.row_block_of.clear();
-        for pattern in self.pattern.iter().skip(2) {
-            let mut of = Vec::with_capacity(pattern.len());
-            for &class in pattern {
+        for (t, pattern) in self.pattern.iter().enumerate() {
+            let used = if t < 2 { std::slice::from_ref(&self.x_class[t]) } else { &pattern[..] };
+            let mut of = Vec::with_capacity(used.len());
+            for &class in used {
                 let index = *block_of_class.entry(class).or_insert_with(|| {
-                    let SlotClass { bounds: [l, h], w } = body.classes[class as usize];
-                    let lanes = |f: &dyn Fn(usize) -> f32| std::array::from_fn(|e| f(e % 3));
-                    self.row_blocks.push([lanes(&|c| l[c]), lanes(&|c| h[c]), [w; LANES]]);
+                    let [l, h] = classes[class as usize].bounds;
+                    let lanes = |b: [f32; 3]| std::array::from_fn(|e| b[e % 3]);
+                    self.row_blocks.push([lanes(l), lanes(h)]);
                     self.row_blocks.len() as u32 - 1
                 });
                 of.push(index);
             }
             self.row_block_of.push(of);
         }
-        // One weight for every class a regular element can have (the non-free pattern classes)?
-        let mut weights =
-            self.pattern.iter().flatten().filter(|&&c| c != 0).map(|&c| body.classes[c as usize].w);
-        self.uniform_inv = match weights.next() {
-            Some(w) if w > 0.0 && weights.all(|x| x.to_bits() == w.to_bits()) => {
-                let wsum = (0..self.offs.len()).fold(0.0f32, |s, _| s + w);
-                Some(super::relax::OMEGA / wsum)
+        self.edges.clear();
+        for row in (0..n).step_by(nx) {
+            for i in [row, row + nx - 1] {
+                let rest = body.lattice.rest[i];
+                let mut edge = Edge { rest, fixed: body.flags[i] & FIXED != 0, ..Edge::default() };
+                for t in 0..w {
+                    let j = body.slot_nbr[i * w + t];
+                    edge.nbr[t] = j;
+                    edge.class[t] = body.slot_class[i * w + t];
+                    edge.nbr_rest[t] = body.lattice.rest[j as usize];
+                }
+                self.edges.push(edge);
             }
-            _ => None,
-        };
+        }
         self.fresh = true;
     }
 }
 
-/// The per-direction inputs of one block: neighbour positions and rest positions, bounds, weights.
-#[derive(Clone, Copy)]
-struct Dir<'a, const L: usize> {
-    p: &'a Lanes<L>,
-    r: &'a Lanes<L>,
-    lo: &'a Lanes<L>,
-    hi: &'a Lanes<L>,
-    w: &'a Lanes<L>,
-}
+/// The bounds (lo, hi) of every slot for a vector of one phase (which coordinate its first lane
+/// holds), as vectors.
+type PhaseBounds<S, const W: usize> = [[<S as pulp::Simd>::f32s; 2]; W];
 
-/// Relaxes one block of regular elements: `relaxed_row` lane by lane, slots in the same order. With
-/// `UNIFORM` every link weighs the same and `inv` is `OMEGA / Σ w`, computed once.
+/// Relaxes one vector of regular elements' coordinates at `p`, with the neighbours' coordinates `nb`
+/// and the slots' bounds lane by lane: the damped Jacobi target `a p + b Σ p_j` (`a = 1 - ω`,
+/// `b = ω / W`), shortened per coordinate where it would leave the boxes `[p_j + lo_j, p_j + hi_j]` of
+/// the element's links, never reversed (as `relaxed_row`). `change` keeps the largest step up and
+/// the largest step down (no absolute value needed).
 #[inline(always)]
-fn block<const W: usize, const UNIFORM: bool, const L: usize>(
-    p: &Lanes<L>,
-    r: &Lanes<L>,
-    dirs: &[Dir<'_, L>; W],
-    inv: f32,
-    out: &mut Lanes<L>,
-    change: &mut Lanes<L>,
-) {
-    for k in 0..L {
-        let mut acc = 0.0f32;
-        let mut wsum = 0.0f32;
-        let mut lo = f32::NEG_INFINITY;
-        let mut hi = f32::INFINITY;
-        for d in dirs {
-            let pj = d.p[k];
-            acc += d.w[k] * (pj - d.r[k]);
-            let (l, h) = (pj + d.lo[k], pj + d.hi[k]);
-            lo = if l > lo { l } else { lo };
-            hi = if h < hi { h } else { hi };
-            if !UNIFORM {
-                wsum += d.w[k];
-            }
-        }
-        let pk = p[k];
-        let inv = if UNIFORM { inv } else { super::relax::OMEGA / wsum };
-        let target = pk + (acc * inv - super::relax::OMEGA * (pk - r[k]));
-        let floor = if lo < pk { lo } else { pk };
-        let ceil = if hi > pk { hi } else { pk };
-        let t = if target > floor { target } else { floor };
-        let q = if t < ceil { t } else { ceil };
-        let q = if UNIFORM || wsum > 0.0 { q } else { pk };
-        out[k] = q;
-        let moved = (q - pk).abs();
-        change[k] = if moved > change[k] { moved } else { change[k] };
+fn vector<S: pulp::Simd, const W: usize>(
+    simd: S,
+    p: S::f32s,
+    nb: [S::f32s; W],
+    bounds: &PhaseBounds<S, W>,
+    [a, b]: [S::f32s; 2],
+    change: &mut [S::f32s; 2],
+) -> S::f32s {
+    let mut sum = nb[0];
+    let mut lo = simd.add_f32s(nb[0], bounds[0][0]);
+    let mut hi = simd.add_f32s(nb[0], bounds[0][1]);
+    for t in 1..W {
+        sum = simd.add_f32s(sum, nb[t]);
+        lo = simd.max_f32s(lo, simd.add_f32s(nb[t], bounds[t][0]));
+        hi = simd.min_f32s(hi, simd.add_f32s(nb[t], bounds[t][1]));
     }
+    // A fused multiply-add where the instruction set has one (plain `a·b + c` otherwise).
+    let target = simd.mul_add_e_f32s(b, sum, simd.mul_f32s(a, p));
+    let floor = simd.min_f32s(lo, p);
+    let ceil = simd.max_f32s(hi, p);
+    let q = simd.min_f32s(simd.max_f32s(target, floor), ceil);
+    let d = simd.sub_f32s(q, p);
+    change[0] = simd.max_f32s(change[0], d);
+    change[1] = simd.min_f32s(change[1], d);
+    q
 }
 
-/// One stencil sweep as an operation for [`pulp::Arch::dispatch`].
-struct Sweep<'a, const W: usize, const L: usize> {
+/// Three vectors of `S` from `s` at float `at`, if there.
+#[inline(always)]
+fn load3<S: pulp::Simd>(s: &[f32], at: usize) -> Option<[S::f32s; 3]> {
+    let (head, _) = S::as_simd_f32s(s.get(at..at + 3 * S::F32_LANES)?);
+    Some([*head.first()?, *head.get(1)?, *head.get(2)?])
+}
+
+/// One band of whole slabs of a stencil sweep, as an operation for [`pulp::Arch::dispatch`].
+struct Band<'a, const W: usize> {
     body: &'a Body,
     stencil: &'a Stencil,
-    next: &'a mut [[f32; 3]],
+    /// The band's first slab, and the band's part of the output.
+    first: usize,
+    out: &'a mut [[f32; 3]],
 }
 
-impl<const W: usize, const L: usize> pulp::WithSimd for Sweep<'_, W, L> {
-    type Output = Option<f32>;
+impl<const W: usize> pulp::WithSimd for Band<'_, W> {
+    type Output = f32;
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _simd: S) -> Option<f32> {
-        self.body.sweep_stencil_w::<W, L>(self.stencil, self.next)
+    fn with_simd<S: pulp::Simd>(self, simd: S) -> f32 {
+        let Band { body, stencil: st, first, out } = self;
+        let mut change = 0.0f32;
+        let mut lane_change = [simd.splat_f32s(0.0); 2];
+        for (s, out) in out.chunks_exact_mut(st.slab).enumerate() {
+            body.relax_slab::<S, W>(simd, st, first + s, out, &mut change, &mut lane_change);
+        }
+        let lanes = simd.reduce_max_f32s(lane_change[0]).max(-simd.reduce_min_f32s(lane_change[1]));
+        if lanes > change { lanes } else { change }
     }
 }
 
-/// The block of a stream starting at `at`. Regular elements have all their neighbours inside the
-/// grid, so blocks are always whole; an empty block (never taken) keeps this free of panics.
-#[inline(always)]
-fn lanes<const L: usize>(s: &[f32], at: usize) -> &Lanes<L> {
-    let block = s.get(at..at + L).and_then(|s| s.try_into().ok());
-    debug_assert!(block.is_some(), "block at {at} of {}", s.len());
-    block.unwrap_or(&const { [0.0; L] })
-}
+/// Bodies of fewer elements sweep on one thread: a second one costs more to start than it saves.
+const PARALLEL_MIN: usize = 1 << 15;
 
 impl Body {
-    /// One Jacobi sweep over every element through the grid fast path; `None` if this body has no
-    /// stencil. Writes `next` for every element and returns the largest move.
+    /// One Jacobi sweep over every element through the grid fast path, into `next` (as long as the
+    /// body); `None` if this body has no stencil. Returns the largest move. Large bodies are cut
+    /// into bands of whole slabs (rows of a sheet, layers of a volume) swept in parallel: every
+    /// element reads only the old positions, so the result does not depend on the cut.
     pub(crate) fn sweep_stencil(&mut self, next: &mut [[f32; 3]]) -> Option<f32> {
-        let nx = self.stencil.as_ref()?.dims[0];
-        if nx < SMALL_LANES / 3 + 2 {
+        let st = self.stencil.as_ref()?;
+        let n = self.pos.len();
+        if next.len() != n || st.slab == 0 || n % st.slab != 0 {
             return None;
         }
-        let wide = nx >= BLOCK + 2;
         let mut stencil = self.stencil.take()?;
         if !stencil.fresh {
             stencil.refresh(self);
         }
-        // The sweep is compiled once per instruction set and the widest the CPU has is chosen at run
-        // time (AVX2 on most x86-64 machines); the arithmetic, and so the result, is the same.
-        let arch = pulp::Arch::new();
-        let change = match (stencil.offs.len(), wide) {
-            (4, true) => arch.dispatch(Sweep::<4, LANES> { body: self, stencil: &stencil, next }),
-            (6, true) => arch.dispatch(Sweep::<6, LANES> { body: self, stencil: &stencil, next }),
-            (4, false) => arch.dispatch(Sweep::<4, SMALL_LANES> { body: self, stencil: &stencil, next }),
-            (6, false) => arch.dispatch(Sweep::<6, SMALL_LANES> { body: self, stencil: &stencil, next }),
+        let change = match stencil.offs.len() {
+            4 => Some(self.sweep_bands::<4>(&stencil, next)),
+            6 => Some(self.sweep_bands::<6>(&stencil, next)),
             _ => None,
         };
         self.stencil = Some(stencil);
         change
     }
 
-    #[inline(always)]
-    fn sweep_stencil_w<const W: usize, const L: usize>(
-        &self,
-        st: &Stencil,
-        next: &mut [[f32; 3]],
-    ) -> Option<f32> {
-        let [nx, ny, nz] = st.dims;
-        let n = self.pos.len();
-        if next.len() != n || st.regular.len() != n {
-            return None;
-        }
-        let (pos, rest) = (&self.pos[..], &self.lattice.rest[..]);
-        let (pf, rf) = (pos.as_flattened(), rest.as_flattened());
-        let mut scalar_change = 0.0f32;
-        let b = L / 3;
-        let mut lane_change = [0.0f32; L];
-        let mut generic = |i: usize, next: &mut [[f32; 3]]| {
-            let p = pos[i];
-            let q = self.relaxed_unless_fixed(i);
-            scalar_change = super::relax::max_change(scalar_change, p, q);
-            next[i] = q;
+    fn sweep_bands<const W: usize>(&self, st: &Stencil, next: &mut [[f32; 3]]) -> f32 {
+        use rayon::prelude::*;
+        let slabs = next.len() / st.slab;
+        let threads = if next.len() >= PARALLEL_MIN { rayon::current_num_threads() } else { 1 };
+        let per = slabs.div_ceil(threads.clamp(1, slabs.max(1))) * st.slab;
+        // Each band is compiled once per instruction set and the widest the CPU has is chosen at
+        // run time (AVX-512 or AVX2 on x86-64, single floats elsewhere).
+        let band = |(b, out): (usize, &mut [[f32; 3]])| {
+            pulp::Arch::new().dispatch(Band::<W> { body: self, stencil: st, first: b * per / st.slab, out })
         };
-        let zero = const { [0.0f32; L] };
-        let mut row_block = [[&zero; 3]; W];
+        if threads <= 1 {
+            return band((0, next));
+        }
+        // A `join` tree over the bands (no allocation: rayon keeps the jobs on the stack).
+        next.par_chunks_mut(per).enumerate().map(band).reduce(|| 0.0, f32::max)
+    }
+
+    /// Computes slab `s`'s relaxed positions into `out` (the slab's part of the output) from the
+    /// body's positions. `change` gathers the generic elements' largest move, `lane_change` the
+    /// vectors'.
+    #[inline(always)]
+    fn relax_slab<S: pulp::Simd, const W: usize>(
+        &self,
+        simd: S,
+        st: &Stencil,
+        s: usize,
+        out: &mut [[f32; 3]],
+        change: &mut f32,
+        lane_change: &mut [S::f32s; 2],
+    ) {
+        let [nx, ny, nz] = st.dims;
+        let base = s * st.slab;
+        let w = self.width;
+        let generic = |i: usize, out: &mut [[f32; 3]], change: &mut f32| {
+            let p = self.pos[i];
+            let q = self.relaxed_unless_fixed(i);
+            *change = super::relax::max_change(*change, p, q);
+            out[i - base] = q;
+        };
+        // A row end through its gathered copy (the same arithmetic as `generic`).
+        let edge = |i: usize, at: usize, out: &mut [[f32; 3]], change: &mut f32| {
+            let p = self.pos[i];
+            let q = match st.edges.get(at) {
+                Some(e) if !e.fixed => {
+                    relaxed_with(&self.pos, p, e.rest, &e.nbr[..w], &e.class[..w], &self.classes, |t, _| {
+                        e.nbr_rest[t]
+                    })
+                }
+                Some(_) => p,
+                None => self.relaxed_unless_fixed(i),
+            };
+            *change = super::relax::max_change(*change, p, q);
+            out[i - base] = q;
+        };
         let interior = |c: usize, len: usize| len < 2 || (c > 0 && c + 1 < len);
-        for k in 0..nz {
-            for j in 0..ny {
-                let row = nx * (j + ny * k);
-                if !(interior(j, ny) && interior(k, nz)) {
-                    for i in row..row + nx {
-                        generic(i, next);
-                    }
-                    continue;
+        // The row's bounds by phase, rebuilt when the row's classes change.
+        let zero = simd.splat_f32s(0.0);
+        let mut bounds: [PhaseBounds<S, W>; 3] = [[[zero; 2]; W]; 3];
+        let mut bounds_of = [u32::MAX; W];
+        for row in (base..base + st.slab).step_by(nx) {
+            let (j, k) = ((row / nx) % ny, row / (nx * ny));
+            if !(interior(j, ny) && interior(k, nz)) {
+                for i in row..row + nx {
+                    generic(i, out, change);
                 }
-                // The y and z slots' blocks for this row.
-                for (t, block) in row_block.iter_mut().enumerate().skip(2) {
-                    let c = if st.slot_axis[t] == 1 { j } else { k };
-                    let index = st.row_block_of.get(t - 2).and_then(|of| of.get(c));
-                    if let Some(lanes) = index.and_then(|&b| st.row_blocks.get(b as usize)) {
-                        *block = lanes.each_ref().map(|l| l.first_chunk::<L>().unwrap_or(&zero));
-                    }
-                }
-                generic(row, next);
-                // Blocks of `b` elements along the row's interior `1..nx - 1`; the last one is moved back to
-                // end at `nx - 1`, overlapping its neighbour (the overlap is computed twice, alike).
-                let mut i = 1;
-                while i < nx - 1 {
-                    let i0 = i.min(nx - 1 - b);
-                    let e = row + i0;
-                    if st.regular.get(e..e + b) != Some(&[1; BLOCK][..b]) {
-                        for e in row + i..row + i0 + b {
-                            generic(e, next);
+                continue;
+            }
+            let mut of = [u32::MAX; W];
+            for (t, of) in of.iter_mut().enumerate() {
+                let c = match st.slot_axis[t] {
+                    0 => 0,
+                    1 => j,
+                    _ => k,
+                };
+                *of = st.row_block_of.get(t).and_then(|of| of.get(c)).copied().unwrap_or(u32::MAX);
+            }
+            if of != bounds_of {
+                bounds_of = of;
+                for (t, &b) in of.iter().enumerate() {
+                    let Some(block) = st.row_blocks.get(b as usize) else { continue };
+                    for (e, half) in block.iter().enumerate() {
+                        if let Some(v) = load3::<S>(half, 0) {
+                            for (phase, v) in bounds.iter_mut().zip(v) {
+                                phase[t][e] = v;
+                            }
                         }
-                        i = i0 + b;
-                        continue;
                     }
-                    let f = 3 * e;
-                    let empty = Dir { p: &zero, r: &zero, lo: &zero, hi: &zero, w: &zero };
-                    let mut dirs = [empty; W];
-                    for (t, dir) in dirs.iter_mut().enumerate() {
-                        let g = (f as isize + 3 * st.offs[t]) as usize;
-                        let (lo, hi, w) = if t < 2 {
-                            (
-                                lanes(&st.x_lo[t], 3 * i0),
-                                lanes(&st.x_hi[t], 3 * i0),
-                                lanes(&st.x_w[t], 3 * i0),
-                            )
-                        } else {
-                            (row_block[t][0], row_block[t][1], row_block[t][2])
-                        };
-                        *dir = Dir { p: lanes(pf, g), r: lanes(rf, g), lo, hi, w };
-                    }
-                    let out: &mut Lanes<L> = match next.as_flattened_mut().get_mut(f..f + L) {
-                        Some(s) => match s.try_into() {
-                            Ok(s) => s,
-                            Err(_) => return None,
-                        },
-                        None => return None,
-                    };
-                    let (p, r) = (lanes(pf, f), lanes(rf, f));
-                    match st.uniform_inv {
-                        Some(inv) => block::<W, true, L>(p, r, &dirs, inv, out, &mut lane_change),
-                        None => block::<W, false, L>(p, r, &dirs, 0.0, out, &mut lane_change),
-                    }
-                    i = i0 + b;
                 }
-                generic(row + nx - 1, next);
+            }
+            // Runs of regular elements along the row's interior `1..nx - 1`.
+            let regular = st.regular.get(row + 1..row + nx - 1).unwrap_or_default();
+            let whole = st.regular_rows.get(row / nx) == Some(&1);
+            let mut x = 1;
+            while x < nx - 1 {
+                let len = if whole { nx - 2 } else { regular[x - 1..].iter().take_while(|&&r| r == 1).count() };
+                if len >= S::F32_LANES {
+                    let out = &mut out[row + x - base..];
+                    self.relax_run::<S, W>(simd, st, row + x, len, &bounds, out, lane_change);
+                    x += len;
+                } else {
+                    let end = x + len.max(1);
+                    for i in row + x..row + end {
+                        generic(i, out, change);
+                    }
+                    x = end;
+                }
+            }
+            // The ends last: the vectors have brought the next row into the cache.
+            edge(row, 2 * (row / nx), out, change);
+            edge(row + nx - 1, 2 * (row / nx) + 1, out, change);
+        }
+    }
+
+    /// Relaxes the `len` (at least `S::F32_LANES`) regular elements from `first` into `out`
+    /// (starting at `first`'s place), three vectors at a time; the last three are moved back to end
+    /// with the run, overlapping their neighbours (the overlap is computed twice, alike).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn relax_run<S: pulp::Simd, const W: usize>(
+        &self,
+        simd: S,
+        st: &Stencil,
+        first: usize,
+        len: usize,
+        bounds: &[PhaseBounds<S, W>; 3],
+        out: &mut [[f32; 3]],
+        lane_change: &mut [S::f32s; 2],
+    ) {
+        let (n, f, g) = (3 * len, 3 * first, 3 * S::F32_LANES);
+        let pf = self.pos.as_flattened();
+        let (Some(p), Some(out)) = (pf.get(f..f + n), out.as_flattened_mut().get_mut(..n)) else { return };
+        let mut nbrs: [&[f32]; W] = [&[]; W];
+        for (t, nb) in nbrs.iter_mut().enumerate() {
+            let at = f as isize + 3 * st.offs[t];
+            let Some(s) = usize::try_from(at).ok().and_then(|at| pf.get(at..at + n)) else { return };
+            *nb = s;
+        }
+        let weights = [simd.splat_f32s(1.0 - OMEGA), simd.splat_f32s(OMEGA / W as f32)];
+        // Whole groups of three vectors, straight from the streams. Plain loops and indexing: a
+        // closure would not inherit the instruction set, and each vector operation would be a call.
+        let pv = S::as_simd_f32s(p).0;
+        let m = pv.len();
+        let mut nv: [&[S::f32s]; W] = [&[]; W];
+        for t in 0..W {
+            nv[t] = S::as_simd_f32s(nbrs[t]).0;
+        }
+        let ov = S::as_mut_simd_f32s(out).0;
+        if ov.len() != m || nv.iter().any(|v| v.len() != m) {
+            return;
+        }
+        let whole = m - m % 3;
+        let mut nb = [simd.splat_f32s(0.0); W];
+        // Locals, so that the loop keeps them in registers.
+        let (bounds, mut change) = (*bounds, *lane_change);
+        for k in (0..whole).step_by(3) {
+            for (v, bounds) in bounds.iter().enumerate() {
+                let i = k + v;
+                for t in 0..W {
+                    nb[t] = nv[t][i];
+                }
+                ov[i] = vector::<S, W>(simd, pv[i], nb, bounds, weights, &mut change);
             }
         }
-        Some(lane_change.iter().fold(scalar_change, |m, &c| if c > m { c } else { m }))
+        *lane_change = change;
+        if whole * S::F32_LANES == n {
+            return;
+        }
+        // The rest: one group moved back to end with the run.
+        let last = n - g;
+        let (Some(pk), Some(o)) = (load3::<S>(p, last), out.get_mut(last..last + g)) else { return };
+        let mut nbs = [pk; W];
+        for t in 0..W {
+            let Some(v) = load3::<S>(nbrs[t], last) else { return };
+            nbs[t] = v;
+        }
+        let (head, _) = S::as_mut_simd_f32s(o);
+        for (v, (slot, bounds)) in head.iter_mut().zip(bounds).enumerate() {
+            for t in 0..W {
+                nb[t] = nbs[t][v];
+            }
+            *slot = vector::<S, W>(simd, pk[v], nb, &bounds, weights, lane_change);
+        }
     }
 }
 
@@ -381,6 +570,7 @@ mod tests {
         st.refresh(&body);
         let regular = st.regular.iter().filter(|&&r| r == 1).count();
         assert_eq!(regular, 62 * 30, "every interior element is regular");
+        assert!(st.regular_rows.iter().skip(1).take(30).all(|&r| r == 1), "whole rows");
         let mut body = body;
         let mut ws = Workspace::new(&body);
         body.relax(&mut ws, RelaxBudget::sweeps(2), RelaxRegion::All);
