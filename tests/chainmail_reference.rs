@@ -327,6 +327,11 @@ fn same(a: &[[f32; 3]], b: &[[f32; 3]]) -> bool {
     a.iter().zip(b).all(|(p, q)| p == q)
 }
 
+/// The largest coordinate difference between two sets of positions.
+fn largest_gap(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+    a.iter().flatten().zip(b.iter().flatten()).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
     #[test]
@@ -383,7 +388,10 @@ fn without_grid(grid: &Lattice) -> Lattice {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(60))]
     /// Whole-body sweeps on grids take the stencil fast path; they must give what the generic path
-    /// gives on the same links, bit for bit, with pins, holds, cuts, two materials and wrapped rows.
+    /// gives on the same links, with pins, holds, cuts, two materials and wrapped rows. Not bit for
+    /// bit: the fast path takes the rest offsets of a uniform grid as cancelling and a relative
+    /// material's boxes as one where they differ only by the rounding of the rest coordinates, and
+    /// uses fused multiply-adds. The difference stays at the rounding of the coordinates.
     #[test]
     fn grid_sweeps_match_the_generic_path(
         dims in (10usize..40, 3usize..12, prop_oneof![Just(1usize), 3usize..6]),
@@ -417,8 +425,11 @@ proptest! {
                 body.deform(&mut ws, e, [p[0] + d[0], p[1] + d[1], p[2] + d[2]], Pass::All).expect("deform");
                 reports.push(body.relax(&mut ws, RelaxBudget::sweeps(3), RelaxRegion::All));
             }
-            prop_assert_eq!(reports[0], reports[1]);
-            prop_assert!(same(bodies[0].positions(), bodies[1].positions()), "stencil and generic sweeps differ");
+            prop_assert_eq!(reports[0].sweeps, reports[1].sweeps);
+            let tolerance = 64.0 * f32::EPSILON * (nx.max(ny).max(nz) as f32 * h);
+            prop_assert!((reports[0].last_change - reports[1].last_change).abs() <= tolerance);
+            let gap = largest_gap(bodies[0].positions(), bodies[1].positions());
+            prop_assert!(gap <= tolerance, "stencil and generic sweeps differ by {gap} (tolerance {tolerance})");
         }
     }
 }

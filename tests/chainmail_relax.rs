@@ -4,46 +4,79 @@
 use dissect::chainmail::{Body, ElementId, Lattice, Material, Pass, RelaxBudget, RelaxRegion, Workspace};
 
 fn deformed_sheet() -> (Body, Workspace) {
-    let lattice = Lattice::sheet(10, 8, 0.01).expect("sheet");
+    deformed(Lattice::sheet(10, 8, 0.01).expect("sheet"), 44, 5)
+}
+
+/// The bodies the sweeps are checked on: the small sheet (generic rows only), and a sheet and a
+/// volume wide enough for the grid fast path's vectors (AVX-512 needs runs of sixteen), deformed
+/// near the middle and near a corner. Returns each with the element it deformed first.
+fn bodies() -> Vec<(Body, Workspace, u32)> {
+    let sheet = Lattice::sheet(64, 40, 0.01).expect("sheet");
+    let volume = Lattice::volume(40, 20, 6, 0.01).expect("volume");
+    let (mut small, ws) = deformed_sheet();
+    let mut all = vec![];
+    small.set_held(ElementId(44), false).expect("free");
+    all.push((small, ws, 44));
+    let (body, ws) = deformed(sheet, 64 * 20 + 30, 70);
+    all.push((body, ws, 64 * 20 + 30));
+    let (body, ws) = deformed(volume, 40 * 20 * 3 + 40 * 10 + 20, 45);
+    all.push((body, ws, 40 * 20 * 3 + 40 * 10 + 20));
+    all
+}
+
+fn deformed(lattice: Lattice, a: u32, b: u32) -> (Body, Workspace) {
     let mut body = Body::new(lattice, Material::relative(1.3, 0.7, 0.4)).expect("body");
     let mut ws = Workspace::new(&body);
-    body.deform(&mut ws, ElementId(44), [0.06, 0.03, 0.02], Pass::All).expect("deform");
-    body.deform(&mut ws, ElementId(5), [0.02, -0.02, -0.01], Pass::All).expect("deform");
+    let (pa, pb) = (body.position(ElementId(a)).expect("a"), body.position(ElementId(b)).expect("b"));
+    body.deform(&mut ws, ElementId(a), [pa[0] + 0.03, pa[1] + 0.03, pa[2] + 0.02], Pass::All)
+        .expect("deform");
+    body.deform(&mut ws, ElementId(b), [pb[0] + 0.02, pb[1] - 0.02, pb[2] - 0.01], Pass::All)
+        .expect("deform");
     (body, ws)
 }
 
 #[test]
 fn energy_never_rises() {
-    let (mut body, mut ws) = deformed_sheet();
-    body.set_held(ElementId(44), true).expect("hold");
-    let mut e = body.energy();
-    assert!(e > 0.0);
-    for _ in 0..300 {
-        body.relax(&mut ws, RelaxBudget::sweeps(1), RelaxRegion::All);
-        let next = body.energy();
-        assert!(next <= e * (1.0 + 1e-6) + 1e-12, "energy rose from {e} to {next}");
-        e = next;
+    for (mut body, mut ws, held) in bodies() {
+        body.set_held(ElementId(held), true).expect("hold");
+        let mut e = body.energy();
+        assert!(e > 0.0);
+        for _ in 0..300 {
+            body.relax(&mut ws, RelaxBudget::sweeps(1), RelaxRegion::All);
+            let next = body.energy();
+            assert!(next <= e * (1.0 + 1e-6) + 1e-12, "energy rose from {e} to {next}");
+            e = next;
+        }
     }
 }
 
 #[test]
 fn free_body_returns_to_rest_up_to_a_rigid_motion() {
-    let (mut body, mut ws) = deformed_sheet();
-    let report = body.relax(
-        &mut ws,
-        RelaxBudget { max_sweeps: 20_000, max_time: None, tolerance: 1e-9 },
-        RelaxRegion::All,
-    );
-    assert!(report.sweeps > 1);
-    let rest = body.lattice().rest_positions();
-    let p = body.positions();
-    let t = [0, 1, 2].map(|k| p[0][k] - rest[0][k]);
-    for (q, r) in p.iter().zip(rest) {
-        for k in 0..3 {
-            assert!((q[k] - r[k] - t[k]).abs() < 1e-5, "not a rigid translation of the rest shape");
+    for (mut body, mut ws, _) in bodies() {
+        // On the larger bodies the sweeps stop a little short of rest: where a link's box keeps an
+        // element from stepping toward its target, the box clamps the sweep (as it is meant to).
+        // Their slowest modes also take tens of thousands of sweeps, which run to the end: a
+        // tolerance under the rounding of the coordinates is never met, so none is set.
+        let small = body.element_count() < 100;
+        let (tolerance, off, energy) = if small { (1e-9, 1e-5, 1e-9) } else { (0.0, 5e-5, 1e-8) };
+        let report = body.relax(
+            &mut ws,
+            RelaxBudget { max_sweeps: 30_000, max_time: None, tolerance },
+            RelaxRegion::All,
+        );
+        assert!(report.sweeps > 1);
+        assert!(report.converged || !small, "no convergence in {} sweeps", report.sweeps);
+        let rest = body.lattice().rest_positions();
+        let p = body.positions();
+        let t = [0, 1, 2].map(|k| p[0][k] - rest[0][k]);
+        for (q, r) in p.iter().zip(rest) {
+            for k in 0..3 {
+                let gap = q[k] - r[k] - t[k];
+                assert!(gap.abs() < off, "{} elements: off a rigid translation by {gap}", p.len());
+            }
         }
+        assert!(body.energy() < energy, "{} elements: energy {} left", p.len(), body.energy());
     }
-    assert!(body.energy() < 1e-9);
 }
 
 #[test]

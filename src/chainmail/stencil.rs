@@ -28,7 +28,6 @@ use super::relax::{OMEGA, relaxed_with};
 const MAX_LANES: usize = 16;
 type Lanes = [f32; 3 * MAX_LANES];
 
-
 /// What the fast path knows of a grid body; rebuilt when pins, cuts or materials change.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Stencil {
@@ -150,19 +149,10 @@ impl Stencil {
         let pattern = slot_axis.iter().map(|&a| vec![0; dims[a]]).collect();
         let largest = rest.iter().flatten().fold(0.0f32, |m, &c| m.max(c.abs()));
         let offsets = body.lattice.rest_offset.iter();
-        let shortest = offsets.map(|o| o.iter().fold(0.0f32, |m, &c| m.max(c.abs()))).fold(f32::INFINITY, f32::min);
+        let shortest =
+            offsets.map(|o| o.iter().fold(0.0f32, |m, &c| m.max(c.abs()))).fold(f32::INFINITY, f32::min);
         let same_box = 8.0 * f32::EPSILON * (1.0 + largest / shortest);
-        Some(Self {
-            dims,
-            offs,
-            interior,
-            balanced,
-            slab,
-            same_box,
-            slot_axis,
-            pattern,
-            ..Self::default()
-        })
+        Some(Self { dims, offs, interior, balanced, slab, same_box, slot_axis, pattern, ..Self::default() })
     }
 
     /// Finds the common class of each slot by grid coordinate, marks the regular elements, and lays
@@ -356,7 +346,7 @@ impl Body {
     pub(crate) fn sweep_stencil(&mut self, next: &mut [[f32; 3]]) -> Option<f32> {
         let st = self.stencil.as_ref()?;
         let n = self.pos.len();
-        if next.len() != n || st.slab == 0 || n % st.slab != 0 {
+        if next.len() != n || st.slab == 0 || !n.is_multiple_of(st.slab) {
             return None;
         }
         let mut stencil = self.stencil.take()?;
@@ -466,7 +456,8 @@ impl Body {
             let whole = st.regular_rows.get(row / nx) == Some(&1);
             let mut x = 1;
             while x < nx - 1 {
-                let len = if whole { nx - 2 } else { regular[x - 1..].iter().take_while(|&&r| r == 1).count() };
+                let len =
+                    if whole { nx - 2 } else { regular[x - 1..].iter().take_while(|&&r| r == 1).count() };
                 if len >= S::F32_LANES {
                     let out = &mut out[row + x - base..];
                     self.relax_run::<S, W>(simd, st, row + x, len, &bounds, out, lane_change);
