@@ -231,20 +231,30 @@ impl Stencil {
         let whole = |r: &[u8]| r.get(interior_columns.clone()).is_some_and(|r| r.iter().all(|&r| r == 1));
         self.regular_rows.clear();
         self.regular_rows.extend(self.regular.chunks_exact(nx).map(|r| whole(r) as u8));
-        let mut block_of_class = std::collections::HashMap::new();
+        // Blocks of classes whose boxes agree to within the rounding of the rest coordinates are
+        // shared, so that on a uniform grid every row has the same blocks.
         self.row_blocks.clear();
         self.row_block_of.clear();
+        let tolerance = self.same_box;
         for (t, pattern) in self.pattern.iter().enumerate() {
             let used = if t < 2 { std::slice::from_ref(&self.x_class[t]) } else { &pattern[..] };
             let mut of = Vec::with_capacity(used.len());
             for &class in used {
-                let index = *block_of_class.entry(class).or_insert_with(|| {
-                    let [l, h] = classes[class as usize].bounds;
-                    let lanes = |b: [f32; 3]| std::array::from_fn(|e| b[e % 3]);
-                    self.row_blocks.push([lanes(l), lanes(h)]);
-                    self.row_blocks.len() as u32 - 1
-                });
-                of.push(index);
+                let c = classes[class as usize];
+                let lanes = |b: [f32; 3]| std::array::from_fn(|e| b[e % 3]);
+                let block = [lanes(c.bounds[0]), lanes(c.bounds[1])];
+                let same = |b: &[Lanes; 2]| {
+                    let close = |x: f32, y: f32| x == y || (x - y).abs() <= tolerance * x.abs().max(y.abs());
+                    b.as_flattened().iter().zip(block.as_flattened()).all(|(&x, &y)| close(x, y))
+                };
+                let index = match self.row_blocks.iter().position(same) {
+                    Some(index) => index,
+                    None => {
+                        self.row_blocks.push(block);
+                        self.row_blocks.len() - 1
+                    }
+                };
+                of.push(index as u32);
             }
             self.row_block_of.push(of);
         }
@@ -266,34 +276,48 @@ impl Stencil {
     }
 }
 
-/// The bounds (lo, hi) of every slot for a vector of one phase (which coordinate its first lane
-/// holds), as vectors.
-type PhaseBounds<S, const W: usize> = [[<S as pulp::Simd>::f32s; 2]; W];
+/// What a vector of one phase (which coordinate its first lane holds) needs of its row: for each
+/// axis (slots `2a`, `2a + 1`), the shift that takes the plus neighbour's box onto the minus one's
+/// and the minus slot's bounds `[shift, lo, hi]` (entries `0..W / 2`), and the target's constant.
+type PhaseConsts<S, const W: usize> = ([[<S as pulp::Simd>::f32s; 3]; W], <S as pulp::Simd>::f32s);
+
+/// The last row's bounds blocks and the constants made of them, kept from row to row.
+type RowCache<S, const W: usize> = ([u32; W], Option<[PhaseConsts<S, W>; 3]>);
 
 /// Relaxes one vector of regular elements' coordinates at `p`, with the neighbours' coordinates `nb`
-/// and the slots' bounds lane by lane: the damped Jacobi target `a p + b Σ p_j` (`a = 1 - ω`,
-/// `b = ω / W`), shortened per coordinate where it would leave the boxes `[p_j + lo_j, p_j + hi_j]` of
-/// the element's links, never reversed (as `relaxed_row`). `change` keeps the largest step up and
-/// the largest step down (no absolute value needed).
+/// (slot order) lane by lane: the damped Jacobi target `a p + b Σ p_j` (`a = 1 - ω`, `b = ω / W`),
+/// shortened per coordinate where it would leave the boxes `[p_j + lo_j, p_j + hi_j]` of the
+/// element's links, never reversed (as `relaxed_row`). `change` keeps the largest step up and the
+/// largest step down (no absolute value needed).
+///
+/// Along an axis the two boxes are one box shifted (the plus link's box on `p[i] - p[j]` is the
+/// minus link's, negated): with the plus neighbour moved by the shift, the pair bounds the element
+/// by `max(minus, plus') + lo` and `min(minus, plus') + hi`, five operations where two boxes take
+/// six. The shift comes back out of the sum in the target's constant.
 #[inline(always)]
 fn vector<S: pulp::Simd, const W: usize>(
     simd: S,
     p: S::f32s,
     nb: [S::f32s; W],
-    bounds: &PhaseBounds<S, W>,
+    (axes, k): &PhaseConsts<S, W>,
     [a, b]: [S::f32s; 2],
     change: &mut [S::f32s; 2],
 ) -> S::f32s {
-    let mut sum = nb[0];
-    let mut lo = simd.add_f32s(nb[0], bounds[0][0]);
-    let mut hi = simd.add_f32s(nb[0], bounds[0][1]);
-    for t in 1..W {
-        sum = simd.add_f32s(sum, nb[t]);
-        lo = simd.max_f32s(lo, simd.add_f32s(nb[t], bounds[t][0]));
-        hi = simd.min_f32s(hi, simd.add_f32s(nb[t], bounds[t][1]));
+    let pair = |ax: usize| {
+        let [shift, lo, hi] = axes[ax];
+        let (minus, plus) = (nb[2 * ax], simd.add_f32s(nb[2 * ax + 1], shift));
+        let sum = simd.add_f32s(minus, plus);
+        (sum, simd.add_f32s(simd.max_f32s(minus, plus), lo), simd.add_f32s(simd.min_f32s(minus, plus), hi))
+    };
+    let (mut sum, mut lo, mut hi) = pair(0);
+    for ax in 1..W / 2 {
+        let (s, l, h) = pair(ax);
+        sum = simd.add_f32s(sum, s);
+        lo = simd.max_f32s(lo, l);
+        hi = simd.min_f32s(hi, h);
     }
-    // A fused multiply-add where the instruction set has one (plain `a·b + c` otherwise).
-    let target = simd.mul_add_e_f32s(b, sum, simd.mul_f32s(a, p));
+    // Fused multiply-adds where the instruction set has them (plain `a·b + c` otherwise).
+    let target = simd.mul_add_e_f32s(b, sum, simd.mul_add_e_f32s(a, p, *k));
     let floor = simd.min_f32s(lo, p);
     let ceil = simd.max_f32s(hi, p);
     let q = simd.min_f32s(simd.max_f32s(target, floor), ceil);
@@ -301,6 +325,28 @@ fn vector<S: pulp::Simd, const W: usize>(
     change[0] = simd.max_f32s(change[0], d);
     change[1] = simd.min_f32s(change[1], d);
     q
+}
+
+/// The shift lanes that take the box `[lo1, hi1]` onto `[lo0, hi0]` (`lo1 = lo0 + shift`,
+/// `hi1 = hi0 + shift`), if they are one box shifted to within `tolerance`.
+fn shift_lanes(lo0: &Lanes, hi0: &Lanes, lo1: &Lanes, hi1: &Lanes, tolerance: f32) -> Option<Lanes> {
+    let mut shift = [0.0f32; 3 * MAX_LANES];
+    for l in 0..shift.len() {
+        let (a, b, c, d) = (lo0[l], hi0[l], lo1[l], hi1[l]);
+        let s = if a.is_finite() && c.is_finite() {
+            c - a
+        } else if b.is_finite() && d.is_finite() {
+            d - b
+        } else {
+            0.0
+        };
+        let close = |x: f32, y: f32| x == y || (x - y).abs() <= tolerance * x.abs().max(y.abs());
+        if !(close(a + s, c) && close(b + s, d)) {
+            return None;
+        }
+        shift[l] = s;
+    }
+    Some(shift)
 }
 
 /// Three vectors of `S` from `s` at float `at`, if there.
@@ -327,8 +373,9 @@ impl<const W: usize> pulp::WithSimd for Band<'_, W> {
         let Band { body, stencil: st, first, out } = self;
         let mut change = 0.0f32;
         let mut lane_change = [simd.splat_f32s(0.0); 2];
+        let mut cache = ([u32::MAX; W], None);
         for (s, out) in out.chunks_exact_mut(st.slab).enumerate() {
-            body.relax_slab::<S, W>(simd, st, first + s, out, &mut change, &mut lane_change);
+            body.relax_slab::<S, W>(simd, st, first + s, out, &mut change, &mut lane_change, &mut cache);
         }
         let lanes = simd.reduce_max_f32s(lane_change[0]).max(-simd.reduce_min_f32s(lane_change[1]));
         if lanes > change { lanes } else { change }
@@ -366,7 +413,9 @@ impl Body {
         use rayon::prelude::*;
         let slabs = next.len() / st.slab;
         let threads = if next.len() >= PARALLEL_MIN { rayon::current_num_threads() } else { 1 };
-        let per = slabs.div_ceil(threads.clamp(1, slabs.max(1))) * st.slab;
+        // A few bands per thread, so that a thread slowed by the rest of the machine takes fewer.
+        let bands = if threads > 1 { 4 * threads } else { 1 };
+        let per = slabs.div_ceil(bands.clamp(1, slabs.max(1))) * st.slab;
         // Each band is compiled once per instruction set and the widest the CPU has is chosen at
         // run time (AVX-512 or AVX2 on x86-64, single floats elsewhere).
         let band = |(b, out): (usize, &mut [[f32; 3]])| {
@@ -391,6 +440,7 @@ impl Body {
         out: &mut [[f32; 3]],
         change: &mut f32,
         lane_change: &mut [S::f32s; 2],
+        cache: &mut RowCache<S, W>,
     ) {
         let [nx, ny, nz] = st.dims;
         let base = s * st.slab;
@@ -417,10 +467,9 @@ impl Body {
             out[i - base] = q;
         };
         let interior = |c: usize, len: usize| len < 2 || (c > 0 && c + 1 < len);
-        // The row's bounds by phase, rebuilt when the row's classes change.
-        let zero = simd.splat_f32s(0.0);
-        let mut bounds: [PhaseBounds<S, W>; 3] = [[[zero; 2]; W]; 3];
-        let mut bounds_of = [u32::MAX; W];
+        // The row's constants by phase, rebuilt when the row's classes change; `None` where an axis's
+        // two boxes are not one box shifted (then the row takes the generic path).
+        let (consts_of, consts) = cache;
         for row in (base..base + st.slab).step_by(nx) {
             let (j, k) = ((row / nx) % ny, row / (nx * ny));
             if !(interior(j, ny) && interior(k, nz)) {
@@ -438,19 +487,16 @@ impl Body {
                 };
                 *of = st.row_block_of.get(t).and_then(|of| of.get(c)).copied().unwrap_or(u32::MAX);
             }
-            if of != bounds_of {
-                bounds_of = of;
-                for (t, &b) in of.iter().enumerate() {
-                    let Some(block) = st.row_blocks.get(b as usize) else { continue };
-                    for (e, half) in block.iter().enumerate() {
-                        if let Some(v) = load3::<S>(half, 0) {
-                            for (phase, v) in bounds.iter_mut().zip(v) {
-                                phase[t][e] = v;
-                            }
-                        }
-                    }
-                }
+            if of != *consts_of {
+                *consts_of = of;
+                *consts = self.row_consts::<S, W>(simd, st, &of);
             }
+            let Some(consts) = consts else {
+                for i in row..row + nx {
+                    generic(i, out, change);
+                }
+                continue;
+            };
             // Runs of regular elements along the row's interior `1..nx - 1`.
             let regular = st.regular.get(row + 1..row + nx - 1).unwrap_or_default();
             let whole = st.regular_rows.get(row / nx) == Some(&1);
@@ -460,7 +506,7 @@ impl Body {
                     if whole { nx - 2 } else { regular[x - 1..].iter().take_while(|&&r| r == 1).count() };
                 if len >= S::F32_LANES {
                     let out = &mut out[row + x - base..];
-                    self.relax_run::<S, W>(simd, st, row + x, len, &bounds, out, lane_change);
+                    self.relax_run::<S, W>(simd, st, row + x, len, consts, out, lane_change);
                     x += len;
                 } else {
                     let end = x + len.max(1);
@@ -476,6 +522,42 @@ impl Body {
         }
     }
 
+    /// The constants of a row whose slots have the bounds blocks `of`, by phase; `None` if an axis's
+    /// two boxes are not one box shifted.
+    #[inline(always)]
+    fn row_consts<S: pulp::Simd, const W: usize>(
+        &self,
+        simd: S,
+        st: &Stencil,
+        of: &[u32; W],
+    ) -> Option<[PhaseConsts<S, W>; 3]> {
+        let block = |t: usize| st.row_blocks.get(of[t] as usize);
+        let mut lanes = [[[0.0f32; 3 * MAX_LANES]; 3]; W];
+        let mut total = [0.0f32; 3 * MAX_LANES];
+        for ax in 0..W / 2 {
+            let ([lo0, hi0], [lo1, hi1]) = (block(2 * ax)?, block(2 * ax + 1)?);
+            let shift = shift_lanes(lo0, hi0, lo1, hi1, st.same_box)?;
+            for (t, s) in total.iter_mut().zip(&shift) {
+                *t += s;
+            }
+            lanes[ax] = [shift, *lo0, *hi0];
+        }
+        let k = total.map(|s| -(OMEGA / W as f32) * s);
+        let load = |l: &Lanes| load3::<S>(l, 0);
+        let zero = simd.splat_f32s(0.0);
+        let mut consts = [([[zero; 3]; W], zero); 3];
+        let ks = load(&k)?;
+        for (v, (axes, kv)) in consts.iter_mut().enumerate() {
+            *kv = ks[v];
+            for ax in 0..W / 2 {
+                for e in 0..3 {
+                    axes[ax][e] = load(&lanes[ax][e])?[v];
+                }
+            }
+        }
+        Some(consts)
+    }
+
     /// Relaxes the `len` (at least `S::F32_LANES`) regular elements from `first` into `out`
     /// (starting at `first`'s place), three vectors at a time; the last three are moved back to end
     /// with the run, overlapping their neighbours (the overlap is computed twice, alike).
@@ -487,7 +569,7 @@ impl Body {
         st: &Stencil,
         first: usize,
         len: usize,
-        bounds: &[PhaseBounds<S, W>; 3],
+        consts: &[PhaseConsts<S, W>; 3],
         out: &mut [[f32; 3]],
         lane_change: &mut [S::f32s; 2],
     ) {
@@ -516,14 +598,14 @@ impl Body {
         let whole = m - m % 3;
         let mut nb = [simd.splat_f32s(0.0); W];
         // Locals, so that the loop keeps them in registers.
-        let (bounds, mut change) = (*bounds, *lane_change);
+        let (consts, mut change) = (*consts, *lane_change);
         for k in (0..whole).step_by(3) {
-            for (v, bounds) in bounds.iter().enumerate() {
+            for (v, consts) in consts.iter().enumerate() {
                 let i = k + v;
                 for t in 0..W {
                     nb[t] = nv[t][i];
                 }
-                ov[i] = vector::<S, W>(simd, pv[i], nb, bounds, weights, &mut change);
+                ov[i] = vector::<S, W>(simd, pv[i], nb, consts, weights, &mut change);
             }
         }
         *lane_change = change;
@@ -539,11 +621,11 @@ impl Body {
             nbs[t] = v;
         }
         let (head, _) = S::as_mut_simd_f32s(o);
-        for (v, (slot, bounds)) in head.iter_mut().zip(bounds).enumerate() {
+        for (v, (slot, consts)) in head.iter_mut().zip(&consts).enumerate() {
             for t in 0..W {
                 nb[t] = nbs[t][v];
             }
-            *slot = vector::<S, W>(simd, pk[v], nb, &bounds, weights, lane_change);
+            *slot = vector::<S, W>(simd, pk[v], nb, consts, weights, lane_change);
         }
     }
 }
