@@ -121,10 +121,9 @@ impl Body {
     }
 
     fn sweep_all(&mut self, ws: &mut Workspace) -> f32 {
-        // Grids take the stencil path: vectors and bands of rows on every thread, the same result up
-        // to rounding (regular elements skip the rest positions, whose offsets cancel).
+        // Grids take the stencil path: in place, in vectors, in bands on the pool's threads; the same
+        // result up to rounding (regular elements skip the rest positions, whose offsets cancel).
         if let Some(change) = self.sweep_stencil(&mut ws.next) {
-            std::mem::swap(&mut self.pos, &mut ws.next);
             return change;
         }
         // Constant widths let the row loop unroll: 4 on sheets, 6 in volumes.
@@ -224,13 +223,14 @@ fn relaxed_row(
     slot_class: &[u32],
 ) -> [f32; 3] {
     let rest = &rest[..pos.len()];
-    relaxed_with(pos, p, r, nbrs, slot_class, classes, |_, j| rest[j])
+    relaxed_with(|j| pos[j], p, r, nbrs, slot_class, classes, |_, j| rest[j])
 }
 
-/// [`relaxed_row`] with the neighbours' rest positions given by `rest_of(slot, neighbour)`.
+/// [`relaxed_row`] with the neighbours' positions given by `pos_of(neighbour)` and their rest
+/// positions by `rest_of(slot, neighbour)`.
 #[inline(always)]
 pub(crate) fn relaxed_with(
-    pos: &[[f32; 3]],
+    pos_of: impl Fn(usize) -> [f32; 3],
     p: [f32; 3],
     r: [f32; 3],
     nbrs: &[u32],
@@ -245,7 +245,7 @@ pub(crate) fn relaxed_with(
     for (t, (&j, &class)) in nbrs.iter().zip(slot_class).enumerate() {
         let SlotClass { bounds: [blo, bhi], w } = classes[class as usize];
         let j = j as usize;
-        let (pj, rj) = (pos[j], rest_of(t, j));
+        let (pj, rj) = (pos_of(j), rest_of(t, j));
         for c in 0..3 {
             acc[c] += w * (pj[c] - rj[c]);
             // The slot bounds `p[i] - p[j]`: `p[i]` must lie in `[pj + blo, pj + bhi]`.

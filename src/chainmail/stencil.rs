@@ -40,8 +40,11 @@ pub(crate) struct Stencil {
     pub(crate) interior: Vec<u8>,
     /// 1 where the rest offsets to an element's neighbours sum to zero up to rounding.
     balanced: Vec<u8>,
-    /// Elements per slab (a row of a sheet, a layer of a volume): the unit of parallel work.
+    /// Elements per slab (a row of a sheet, a layer of a volume), and whether every element's
+    /// neighbours lie in its own slab or the next one either side (not so across a wrap seam of the
+    /// slowest axis: then the sweep cannot work in place and the generic sweep runs).
     slab: usize,
+    slab_local: bool,
     /// How far (relative) boxes may differ and still count as the same: the rounding of the rest
     /// coordinates, relative to the shortest link, which a relative material's boxes inherit.
     same_box: f32,
@@ -146,13 +149,26 @@ impl Stencil {
             })
             .collect();
         let slab = if nz > 1 { nx * ny } else { nx };
+        let slab_local =
+            rows.enumerate().all(|(i, row)| row.iter().all(|&j| (j as usize / slab).abs_diff(i / slab) <= 1));
         let pattern = slot_axis.iter().map(|&a| vec![0; dims[a]]).collect();
         let largest = rest.iter().flatten().fold(0.0f32, |m, &c| m.max(c.abs()));
         let offsets = body.lattice.rest_offset.iter();
         let shortest =
             offsets.map(|o| o.iter().fold(0.0f32, |m, &c| m.max(c.abs()))).fold(f32::INFINITY, f32::min);
         let same_box = 8.0 * f32::EPSILON * (1.0 + largest / shortest);
-        Some(Self { dims, offs, interior, balanced, slab, same_box, slot_axis, pattern, ..Self::default() })
+        Some(Self {
+            dims,
+            offs,
+            interior,
+            balanced,
+            slab,
+            slab_local,
+            same_box,
+            slot_axis,
+            pattern,
+            ..Self::default()
+        })
     }
 
     /// Finds the common class of each slot by grid coordinate, marks the regular elements, and lays
@@ -356,13 +372,62 @@ fn load3<S: pulp::Simd>(s: &[f32], at: usize) -> Option<[S::f32s; 3]> {
     Some([*head.first()?, *head.get(1)?, *head.get(2)?])
 }
 
-/// One band of whole slabs of a stencil sweep, as an operation for [`pulp::Arch::dispatch`].
+/// The old positions of one slab and of the slabs either side (`None` past the grid's ends), as a
+/// band sweeping in place sees them: its own slab not yet written, the one before kept back until
+/// this one is computed, and halo copies where the neighbour slab belongs to another band.
+#[derive(Clone, Copy)]
+struct Window<'a> {
+    /// Elements per slab, and the slab's index in the grid.
+    slab: usize,
+    s: usize,
+    prev: Option<&'a [[f32; 3]]>,
+    cur: &'a [[f32; 3]],
+    next: Option<&'a [[f32; 3]]>,
+}
+
+impl<'a> Window<'a> {
+    /// The old position of element `j`, which lies in this slab or one either side (a stencil's
+    /// grid is slab-local).
+    #[inline(always)]
+    fn pos(&self, j: usize) -> [f32; 3] {
+        let (sj, local) = (j / self.slab, j % self.slab);
+        let slab = if sj == self.s {
+            Some(self.cur)
+        } else if sj + 1 == self.s {
+            self.prev
+        } else {
+            self.next
+        };
+        slab.and_then(|s| s.get(local)).copied().unwrap_or_default()
+    }
+
+    /// The stream of slot offset `off` (in elements) for the run of `n` floats from element
+    /// `first` of this slab: the neighbour slab's same place for a whole slab's offset, else this
+    /// slab shifted.
+    #[inline(always)]
+    fn stream(&self, off: isize, first: usize, n: usize) -> Option<&'a [f32]> {
+        let (slab, at) = if off == self.slab as isize {
+            (self.next?, first)
+        } else if off == -(self.slab as isize) {
+            (self.prev?, first)
+        } else {
+            (self.cur, usize::try_from(first as isize + off).ok()?)
+        };
+        slab.as_flattened().get(3 * at..3 * at + n)
+    }
+}
+
+/// One band of whole slabs swept in place, as an operation for [`pulp::Arch::dispatch`].
 struct Band<'a, const W: usize> {
     body: &'a Body,
     stencil: &'a Stencil,
-    /// The band's first slab, and the band's part of the output.
+    /// The band's first slab, its positions, the old slabs either side (halo copies), and two
+    /// slabs of scratch.
     first: usize,
-    out: &'a mut [[f32; 3]],
+    region: &'a mut [[f32; 3]],
+    prev: Option<&'a [[f32; 3]]>,
+    next: Option<&'a [[f32; 3]]>,
+    scratch: &'a mut [[f32; 3]],
 }
 
 impl<const W: usize> pulp::WithSimd for Band<'_, W> {
@@ -370,12 +435,35 @@ impl<const W: usize> pulp::WithSimd for Band<'_, W> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, simd: S) -> f32 {
-        let Band { body, stencil: st, first, out } = self;
+        let Band { body, stencil: st, first, region, prev, next, scratch } = self;
+        let slab = st.slab;
+        let m = region.len() / slab;
+        let (now, pending) = scratch.split_at_mut(slab);
+        let mut buffers = [now, &mut pending[..slab]];
         let mut change = 0.0f32;
         let mut lane_change = [simd.splat_f32s(0.0); 2];
         let mut cache = ([u32::MAX; W], None);
-        for (s, out) in out.chunks_exact_mut(st.slab).enumerate() {
-            body.relax_slab::<S, W>(simd, st, first + s, out, &mut change, &mut lane_change, &mut cache);
+        for r in 0..m {
+            {
+                // Slab `r - 1` is still old: its new positions wait in `buffers[1]`.
+                let (done, rest) = region.split_at(r * slab);
+                let window = Window {
+                    slab,
+                    s: first + r,
+                    prev: if r == 0 { prev } else { done.get((r - 1) * slab..) },
+                    cur: &rest[..slab],
+                    next: if r + 1 < m { rest.get(slab..2 * slab) } else { next },
+                };
+                let [now, _] = &mut buffers;
+                body.relax_slab::<S, W>(simd, st, &window, now, &mut change, &mut lane_change, &mut cache);
+            }
+            if r > 0 {
+                region[(r - 1) * slab..r * slab].copy_from_slice(buffers[1]);
+            }
+            buffers.swap(0, 1);
+        }
+        if let Some(last) = region.get_mut((m.max(1) - 1) * slab..) {
+            last.copy_from_slice(buffers[1]);
         }
         let lanes = simd.reduce_max_f32s(lane_change[0]).max(-simd.reduce_min_f32s(lane_change[1]));
         if lanes > change { lanes } else { change }
@@ -384,84 +472,138 @@ impl<const W: usize> pulp::WithSimd for Band<'_, W> {
 
 /// Bodies of fewer elements sweep on one thread: a second one costs more to start than it saves.
 const PARALLEL_MIN: usize = 1 << 15;
+/// Fewest slabs a band has.
+const BAND_MIN: usize = 4;
+
+/// Scratch slabs a sweep split `depth` times needs: two per band, two halos per split.
+fn scratch_slabs(depth: u32) -> usize {
+    (0..depth).fold(2, |s, _| 2 * s + 2)
+}
 
 impl Body {
-    /// One Jacobi sweep over every element through the grid fast path, into `next` (as long as the
-    /// body); `None` if this body has no stencil. Returns the largest move. Large bodies are cut
-    /// into bands of whole slabs (rows of a sheet, layers of a volume) swept in parallel: every
-    /// element reads only the old positions, so the result does not depend on the cut.
-    pub(crate) fn sweep_stencil(&mut self, next: &mut [[f32; 3]]) -> Option<f32> {
+    /// One Jacobi sweep over every element through the grid fast path, in place, with `scratch`
+    /// (the workspace's spare positions); `None` if this body has no stencil, its neighbours reach
+    /// across a seam of the slowest axis, or it is too short. Returns the largest move.
+    ///
+    /// A band of slabs (rows of a sheet, layers of a volume) computes each slab into scratch and
+    /// writes it back once the next one is computed, so every element sees its neighbours' old
+    /// positions (a Jacobi sweep) while positions are read once and written once. Large bodies are
+    /// cut into bands swept on the pool's threads, each seeing copies of the slabs beyond its ends:
+    /// the result does not depend on the cut.
+    pub(crate) fn sweep_stencil(&mut self, scratch: &mut [[f32; 3]]) -> Option<f32> {
         let st = self.stencil.as_ref()?;
         let n = self.pos.len();
-        if next.len() != n || st.slab == 0 || !n.is_multiple_of(st.slab) {
+        let slab = st.slab;
+        if !st.slab_local || slab == 0 || !n.is_multiple_of(slab) || scratch.len() < 2 * slab {
             return None;
+        }
+        let slabs = n / slab;
+        let threads = if n >= PARALLEL_MIN { rayon::current_num_threads() } else { 1 };
+        let mut depth = 0;
+        while (1 << (depth + 1)) <= threads
+            && slabs >> (depth + 1) >= BAND_MIN
+            && scratch_slabs(depth + 1) * slab <= scratch.len()
+        {
+            depth += 1;
         }
         let mut stencil = self.stencil.take()?;
         if !stencil.fresh {
             stencil.refresh(self);
         }
+        let mut pos = std::mem::take(&mut self.pos);
         let change = match stencil.offs.len() {
-            4 => Some(self.sweep_bands::<4>(&stencil, next)),
-            6 => Some(self.sweep_bands::<6>(&stencil, next)),
+            4 => Some(self.sweep_range::<4>(&stencil, 0, &mut pos, None, None, scratch, depth)),
+            6 => Some(self.sweep_range::<6>(&stencil, 0, &mut pos, None, None, scratch, depth)),
             _ => None,
         };
+        self.pos = pos;
         self.stencil = Some(stencil);
         change
     }
 
-    fn sweep_bands<const W: usize>(&self, st: &Stencil, next: &mut [[f32; 3]]) -> f32 {
-        use rayon::prelude::*;
-        let slabs = next.len() / st.slab;
-        let threads = if next.len() >= PARALLEL_MIN { rayon::current_num_threads() } else { 1 };
-        // A few bands per thread, so that a thread slowed by the rest of the machine takes fewer.
-        let bands = if threads > 1 { 4 * threads } else { 1 };
-        let per = slabs.div_ceil(bands.clamp(1, slabs.max(1))) * st.slab;
-        // Each band is compiled once per instruction set and the widest the CPU has is chosen at
-        // run time (AVX-512 or AVX2 on x86-64, single floats elsewhere).
-        let band = |(b, out): (usize, &mut [[f32; 3]])| {
-            pulp::Arch::new().dispatch(Band::<W> { body: self, stencil: st, first: b * per / st.slab, out })
-        };
-        if threads <= 1 {
-            return band((0, next));
+    /// Sweeps the slabs of `region` (from slab `first`), split `depth` times into bands run in
+    /// parallel. `prev` and `next` are the old slabs beyond the region's ends.
+    #[allow(clippy::too_many_arguments)]
+    fn sweep_range<const W: usize>(
+        &self,
+        st: &Stencil,
+        first: usize,
+        region: &mut [[f32; 3]],
+        prev: Option<&[[f32; 3]]>,
+        next: Option<&[[f32; 3]]>,
+        scratch: &mut [[f32; 3]],
+        depth: u32,
+    ) -> f32 {
+        let slab = st.slab;
+        let half = region.len() / slab / 2;
+        if depth == 0 || half == 0 {
+            // Each band is compiled once per instruction set and the widest the CPU has is chosen
+            // at run time (AVX-512 or AVX2 on x86-64, single floats elsewhere).
+            let band = Band::<W> { body: self, stencil: st, first, region, prev, next, scratch };
+            return pulp::Arch::new().dispatch(band);
         }
-        // A `join` tree over the bands (no allocation: rayon keeps the jobs on the stack).
-        next.par_chunks_mut(per).enumerate().map(band).reduce(|| 0.0, f32::max)
+        let (halos, rest) = scratch.split_at_mut(2 * slab);
+        let (left_last, right_first) = halos.split_at_mut(slab);
+        left_last.copy_from_slice(&region[(half - 1) * slab..half * slab]);
+        right_first.copy_from_slice(&region[half * slab..(half + 1) * slab]);
+        let (left, right) = region.split_at_mut(half * slab);
+        let (left_scratch, right_scratch) = rest.split_at_mut(rest.len() / 2);
+        let (a, b) = rayon::join(
+            || self.sweep_range::<W>(st, first, left, prev, Some(right_first), left_scratch, depth - 1),
+            || {
+                self.sweep_range::<W>(
+                    st,
+                    first + half,
+                    right,
+                    Some(left_last),
+                    next,
+                    right_scratch,
+                    depth - 1,
+                )
+            },
+        );
+        a.max(b)
     }
 
-    /// Computes slab `s`'s relaxed positions into `out` (the slab's part of the output) from the
-    /// body's positions. `change` gathers the generic elements' largest move, `lane_change` the
-    /// vectors'.
+    /// Computes the relaxed positions of the window's slab into `out` from the window's old
+    /// positions. `change` gathers the generic elements' largest move, `lane_change` the vectors'.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn relax_slab<S: pulp::Simd, const W: usize>(
         &self,
         simd: S,
         st: &Stencil,
-        s: usize,
+        window: &Window<'_>,
         out: &mut [[f32; 3]],
         change: &mut f32,
         lane_change: &mut [S::f32s; 2],
         cache: &mut RowCache<S, W>,
     ) {
         let [nx, ny, nz] = st.dims;
-        let base = s * st.slab;
+        let base = window.s * st.slab;
         let w = self.width;
+        let (rest, classes) = (&self.lattice.rest, &self.classes);
+        let pos_of = |j: usize| window.pos(j);
         let generic = |i: usize, out: &mut [[f32; 3]], change: &mut f32| {
-            let p = self.pos[i];
-            let q = self.relaxed_unless_fixed(i);
+            let p = pos_of(i);
+            let q = if self.flags[i] & FIXED != 0 {
+                p
+            } else {
+                let (nbrs, slot_class) =
+                    (&self.slot_nbr[i * w..(i + 1) * w], &self.slot_class[i * w..(i + 1) * w]);
+                relaxed_with(pos_of, p, rest[i], nbrs, slot_class, classes, |_, j| rest[j])
+            };
             *change = super::relax::max_change(*change, p, q);
             out[i - base] = q;
         };
         // A row end through its gathered copy (the same arithmetic as `generic`).
         let edge = |i: usize, at: usize, out: &mut [[f32; 3]], change: &mut f32| {
-            let p = self.pos[i];
+            let p = pos_of(i);
             let q = match st.edges.get(at) {
                 Some(e) if !e.fixed => {
-                    relaxed_with(&self.pos, p, e.rest, &e.nbr[..w], &e.class[..w], &self.classes, |t, _| {
-                        e.nbr_rest[t]
-                    })
+                    relaxed_with(pos_of, p, e.rest, &e.nbr[..w], &e.class[..w], classes, |t, _| e.nbr_rest[t])
                 }
-                Some(_) => p,
-                None => self.relaxed_unless_fixed(i),
+                _ => p,
             };
             *change = super::relax::max_change(*change, p, q);
             out[i - base] = q;
@@ -506,7 +648,7 @@ impl Body {
                     if whole { nx - 2 } else { regular[x - 1..].iter().take_while(|&&r| r == 1).count() };
                 if len >= S::F32_LANES {
                     let out = &mut out[row + x - base..];
-                    self.relax_run::<S, W>(simd, st, row + x, len, consts, out, lane_change);
+                    relax_run::<S, W>(simd, st, window, row + x - base, len, consts, out, lane_change);
                     x += len;
                 } else {
                     let end = x + len.max(1);
@@ -557,76 +699,76 @@ impl Body {
         }
         Some(consts)
     }
+}
 
-    /// Relaxes the `len` (at least `S::F32_LANES`) regular elements from `first` into `out`
-    /// (starting at `first`'s place), three vectors at a time; the last three are moved back to end
-    /// with the run, overlapping their neighbours (the overlap is computed twice, alike).
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn relax_run<S: pulp::Simd, const W: usize>(
-        &self,
-        simd: S,
-        st: &Stencil,
-        first: usize,
-        len: usize,
-        consts: &[PhaseConsts<S, W>; 3],
-        out: &mut [[f32; 3]],
-        lane_change: &mut [S::f32s; 2],
-    ) {
-        let (n, f, g) = (3 * len, 3 * first, 3 * S::F32_LANES);
-        let pf = self.pos.as_flattened();
-        let (Some(p), Some(out)) = (pf.get(f..f + n), out.as_flattened_mut().get_mut(..n)) else { return };
-        let mut nbrs: [&[f32]; W] = [&[]; W];
-        for (t, nb) in nbrs.iter_mut().enumerate() {
-            let at = f as isize + 3 * st.offs[t];
-            let Some(s) = usize::try_from(at).ok().and_then(|at| pf.get(at..at + n)) else { return };
-            *nb = s;
-        }
-        let weights = [simd.splat_f32s(1.0 - OMEGA), simd.splat_f32s(OMEGA / W as f32)];
-        // Whole groups of three vectors, straight from the streams. Plain loops and indexing: a
-        // closure would not inherit the instruction set, and each vector operation would be a call.
-        let pv = S::as_simd_f32s(p).0;
-        let m = pv.len();
-        let mut nv: [&[S::f32s]; W] = [&[]; W];
-        for t in 0..W {
-            nv[t] = S::as_simd_f32s(nbrs[t]).0;
-        }
-        let ov = S::as_mut_simd_f32s(out).0;
-        if ov.len() != m || nv.iter().any(|v| v.len() != m) {
-            return;
-        }
-        let whole = m - m % 3;
-        let mut nb = [simd.splat_f32s(0.0); W];
-        // Locals, so that the loop keeps them in registers.
-        let (consts, mut change) = (*consts, *lane_change);
-        for k in (0..whole).step_by(3) {
-            for (v, consts) in consts.iter().enumerate() {
-                let i = k + v;
-                for t in 0..W {
-                    nb[t] = nv[t][i];
-                }
-                ov[i] = vector::<S, W>(simd, pv[i], nb, consts, weights, &mut change);
-            }
-        }
-        *lane_change = change;
-        if whole * S::F32_LANES == n {
-            return;
-        }
-        // The rest: one group moved back to end with the run.
-        let last = n - g;
-        let (Some(pk), Some(o)) = (load3::<S>(p, last), out.get_mut(last..last + g)) else { return };
-        let mut nbs = [pk; W];
-        for t in 0..W {
-            let Some(v) = load3::<S>(nbrs[t], last) else { return };
-            nbs[t] = v;
-        }
-        let (head, _) = S::as_mut_simd_f32s(o);
-        for (v, (slot, consts)) in head.iter_mut().zip(&consts).enumerate() {
+/// Relaxes the `len` (at least `S::F32_LANES`) regular elements from element `first` of the
+/// window's slab into `out` (starting at `first`'s place), three vectors at a time; the last three
+/// are moved back to end with the run, overlapping their neighbours (computed twice, alike).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn relax_run<S: pulp::Simd, const W: usize>(
+    simd: S,
+    st: &Stencil,
+    window: &Window<'_>,
+    first: usize,
+    len: usize,
+    consts: &[PhaseConsts<S, W>; 3],
+    out: &mut [[f32; 3]],
+    lane_change: &mut [S::f32s; 2],
+) {
+    let (n, g) = (3 * len, 3 * S::F32_LANES);
+    let (Some(p), Some(out)) = (window.stream(0, first, n), out.as_flattened_mut().get_mut(..n)) else {
+        return;
+    };
+    let mut nbrs: [&[f32]; W] = [&[]; W];
+    for (t, nb) in nbrs.iter_mut().enumerate() {
+        let Some(s) = window.stream(st.offs[t], first, n) else { return };
+        *nb = s;
+    }
+    let weights = [simd.splat_f32s(1.0 - OMEGA), simd.splat_f32s(OMEGA / W as f32)];
+    // Whole groups of three vectors, straight from the streams. Plain loops and indexing: a
+    // closure would not inherit the instruction set, and each vector operation would be a call.
+    let pv = S::as_simd_f32s(p).0;
+    let m = pv.len();
+    let mut nv: [&[S::f32s]; W] = [&[]; W];
+    for t in 0..W {
+        nv[t] = S::as_simd_f32s(nbrs[t]).0;
+    }
+    let ov = S::as_mut_simd_f32s(out).0;
+    if ov.len() != m || nv.iter().any(|v| v.len() != m) {
+        return;
+    }
+    let whole = m - m % 3;
+    let mut nb = [simd.splat_f32s(0.0); W];
+    // Locals, so that the loop keeps them in registers.
+    let (consts, mut change) = (*consts, *lane_change);
+    for k in (0..whole).step_by(3) {
+        for (v, consts) in consts.iter().enumerate() {
+            let i = k + v;
             for t in 0..W {
-                nb[t] = nbs[t][v];
+                nb[t] = nv[t][i];
             }
-            *slot = vector::<S, W>(simd, pk[v], nb, consts, weights, lane_change);
+            ov[i] = vector::<S, W>(simd, pv[i], nb, consts, weights, &mut change);
         }
+    }
+    *lane_change = change;
+    if whole * S::F32_LANES == n {
+        return;
+    }
+    // The rest: one group moved back to end with the run.
+    let last = n - g;
+    let (Some(pk), Some(o)) = (load3::<S>(p, last), out.get_mut(last..last + g)) else { return };
+    let mut nbs = [pk; W];
+    for t in 0..W {
+        let Some(v) = load3::<S>(nbrs[t], last) else { return };
+        nbs[t] = v;
+    }
+    let (head, _) = S::as_mut_simd_f32s(o);
+    for (v, (slot, consts)) in head.iter_mut().zip(&consts).enumerate() {
+        for t in 0..W {
+            nb[t] = nbs[t][v];
+        }
+        *slot = vector::<S, W>(simd, pk[v], nb, consts, weights, lane_change);
     }
 }
 
