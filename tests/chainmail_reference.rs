@@ -425,11 +425,65 @@ proptest! {
                 body.deform(&mut ws, e, [p[0] + d[0], p[1] + d[1], p[2] + d[2]], Pass::All).expect("deform");
                 reports.push(body.relax(&mut ws, RelaxBudget::sweeps(3), RelaxRegion::All));
             }
-            prop_assert_eq!(reports[0].sweeps, reports[1].sweeps);
+            // The generic path can land on an exact fixed point and stop early (no change at all);
+            // the fast path's rounding keeps moving by units in the last place.
+            prop_assert!(reports[0].sweeps == reports[1].sweeps || reports[1].last_change == 0.0);
             let tolerance = 64.0 * f32::EPSILON * (nx.max(ny).max(nz) as f32 * h);
             prop_assert!((reports[0].last_change - reports[1].last_change).abs() <= tolerance);
             let gap = largest_gap(bodies[0].positions(), bodies[1].positions());
             prop_assert!(gap <= tolerance, "stencil and generic sweeps differ by {gap} (tolerance {tolerance})");
+            // The next move starts both from the same positions: a soft chain reaction can turn a
+            // difference in the last bits into a different sponsor, and so a different shape.
+            let common = bodies[1].positions().to_vec();
+            for (i, &q) in common.iter().enumerate() {
+                bodies[0].set_position(ElementId(i as u32), q).expect("position");
+            }
+        }
+    }
+}
+
+/// Bodies this large sweep in bands, one per thread, each with copies of the slabs beyond its ends;
+/// split two and four ways, the sweep must still match the generic path.
+#[test]
+fn banded_sweeps_match_the_generic_path() {
+    for dims in [[230, 160, 1], [40, 32, 30]] {
+        for threads in [2, 4] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+            let grid = Lattice::grid(&GridSpec::uniform(dims, 0.01)).expect("grid");
+            let plain = without_grid(&grid);
+            let n = grid.element_count() as u32;
+            let dressing = Dressing {
+                stiffness: 3.0,
+                region_x: 0.035,
+                pins: &[n / 3, n / 2 + 7],
+                holds: &[],
+                cuts: &[n, 3 * n],
+            };
+            let mut bodies =
+                [grid, plain].map(|lattice| dress(lattice, Material::relative(1.2, 0.8, 0.3), &dressing));
+            // Moves near the bands' ends (the middle slab) and elsewhere.
+            let middle = n / 2 + dims[0] as u32 / 2;
+            for (e, d) in
+                [(middle, [0.02, 0.01, 0.03]), (n / 5, [-0.03, 0.02, 0.0]), (middle + 3, [0.0, -0.02, 0.01])]
+            {
+                for body in &mut bodies {
+                    let mut ws = Workspace::new(body);
+                    let p = body.position(ElementId(e)).expect("e");
+                    body.deform(&mut ws, ElementId(e), [p[0] + d[0], p[1] + d[1], p[2] + d[2]], Pass::All)
+                        .expect("deform");
+                    pool.install(|| body.relax(&mut ws, RelaxBudget::sweeps(2), RelaxRegion::All));
+                }
+                let gap = largest_gap(bodies[0].positions(), bodies[1].positions());
+                let tolerance = 64.0 * f32::EPSILON * (dims[0].max(dims[1]) as f32 * 0.01);
+                assert!(
+                    gap <= tolerance,
+                    "{dims:?} on {threads} threads: differ by {gap} (tolerance {tolerance})"
+                );
+                let common = bodies[1].positions().to_vec();
+                for (i, &q) in common.iter().enumerate() {
+                    bodies[0].set_position(ElementId(i as u32), q).expect("position");
+                }
+            }
         }
     }
 }

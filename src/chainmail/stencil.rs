@@ -390,13 +390,14 @@ impl<'a> Window<'a> {
     /// grid is slab-local).
     #[inline(always)]
     fn pos(&self, j: usize) -> [f32; 3] {
-        let (sj, local) = (j / self.slab, j % self.slab);
-        let slab = if sj == self.s {
-            Some(self.cur)
-        } else if sj + 1 == self.s {
-            self.prev
+        // Comparisons, not a division: this runs for every neighbour of every row end.
+        let base = self.s * self.slab;
+        let (slab, local) = if j < base {
+            (self.prev, (j + self.slab).wrapping_sub(base))
+        } else if j - base < self.slab {
+            (Some(self.cur), j - base)
         } else {
-            self.next
+            (self.next, j - base - self.slab)
         };
         slab.and_then(|s| s.get(local)).copied().unwrap_or_default()
     }
@@ -676,13 +677,13 @@ impl Body {
         let block = |t: usize| st.row_blocks.get(of[t] as usize);
         let mut lanes = [[[0.0f32; 3 * MAX_LANES]; 3]; W];
         let mut total = [0.0f32; 3 * MAX_LANES];
-        for ax in 0..W / 2 {
+        for (ax, lanes) in lanes.iter_mut().enumerate().take(W / 2) {
             let ([lo0, hi0], [lo1, hi1]) = (block(2 * ax)?, block(2 * ax + 1)?);
             let shift = shift_lanes(lo0, hi0, lo1, hi1, st.same_box)?;
             for (t, s) in total.iter_mut().zip(&shift) {
                 *t += s;
             }
-            lanes[ax] = [shift, *lo0, *hi0];
+            *lanes = [shift, *lo0, *hi0];
         }
         let k = total.map(|s| -(OMEGA / W as f32) * s);
         let load = |l: &Lanes| load3::<S>(l, 0);
