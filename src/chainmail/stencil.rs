@@ -501,7 +501,7 @@ impl Body {
         let slabs = n / slab;
         let threads = if n >= PARALLEL_MIN { rayon::current_num_threads() } else { 1 };
         let mut depth = 0;
-        while (1 << (depth + 1)) <= threads
+        while (1 << (depth + 1)) <= 2 * threads
             && slabs >> (depth + 1) >= BAND_MIN
             && scratch_slabs(depth + 1) * slab <= scratch.len()
         {
