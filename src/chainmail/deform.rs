@@ -495,10 +495,14 @@ fn batch<const MASK: u8>(
     moved.extend(run.clone().map(|c| c as u32));
     let all_interior = b.interior.get(run.clone()).is_some_and(|r| r.iter().all(|&i| i == 1));
     for (u, tail) in tail.iter_mut().enumerate().take(width) {
+        // The list's end in a local, not behind the reference: a store and a reload per entry
+        // would chain every push to the one before.
+        let mut end = *tail;
+        let list = &mut lists[u * n..(u + 1) * n];
         let mut push = |c: usize, d: usize| {
             if !run.contains(&d) && stamp.get(d) != Some(&g) {
-                lists[u * n + *tail] = c as u32;
-                *tail += 1;
+                list[end] = c as u32;
+                end += 1;
             }
         };
         match b.offs.get(u) {
@@ -519,6 +523,7 @@ fn batch<const MASK: u8>(
                 }
             }
         }
+        *tail = end;
     }
     m
 }
