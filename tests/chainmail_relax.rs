@@ -110,3 +110,38 @@ fn cut_links_carry_no_energy_and_no_motion() {
     }
     assert!(body.position(ElementId(3)).expect("right")[0] > 0.1);
 }
+
+/// Relaxation spreads a poke out of the plane along a long strip (the grid fast path): ahead of the
+/// disturbance the out-of-plane coordinate is a tiny power of the distance, and it must never be a
+/// subnormal float, on which every operation is a hundred times slower.
+#[test]
+fn no_coordinate_becomes_subnormal() {
+    strip_stays_normal(|body, ws, _| {
+        body.relax(ws, RelaxBudget::sweeps(1), RelaxRegion::All);
+    });
+}
+
+/// The same through the generic path (`relax_elements`, which the tissue uses).
+#[test]
+fn no_coordinate_becomes_subnormal_on_the_generic_path() {
+    strip_stays_normal(|body, ws, all| {
+        body.relax_elements(ws, RelaxBudget::sweeps(1), all);
+    });
+}
+
+fn strip_stays_normal(mut sweep: impl FnMut(&mut Body, &mut Workspace, &[ElementId])) {
+    let (nx, ny) = (800u32, 20u32);
+    let lattice = Lattice::sheet(nx as usize, ny as usize, 0.01).expect("sheet");
+    let mut body = Body::new(lattice, Material::relative(1.3, 0.7, 0.4)).expect("body");
+    let mut ws = Workspace::new(&body);
+    let all: Vec<ElementId> = (0..nx * ny).map(ElementId).collect();
+    let c = ElementId(ny / 2 * nx + 1);
+    let p = body.position(c).expect("c");
+    body.deform(&mut ws, c, [p[0], p[1], 0.05], Pass::All).expect("deform");
+    body.set_held(c, true).expect("hold");
+    for _ in 0..300 {
+        sweep(&mut body, &mut ws, &all);
+        let subnormal = body.positions().iter().flatten().filter(|c| c.is_subnormal()).count();
+        assert_eq!(subnormal, 0, "subnormal coordinates");
+    }
+}

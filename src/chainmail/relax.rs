@@ -266,7 +266,9 @@ pub(crate) fn relaxed_with(
         let floor = if lo[c] < p[c] { lo[c] } else { p[c] };
         let ceil = if hi[c] > p[c] { hi[c] } else { p[c] };
         let t = if target > floor { target } else { floor };
-        q[c] = if t < ceil { t } else { ceil };
+        let t = if t < ceil { t } else { ceil };
+        // No subnormal coordinates (see `stencil::FLUSH`).
+        q[c] = (t + super::stencil::FLUSH) - super::stencil::FLUSH;
     }
     q
 }

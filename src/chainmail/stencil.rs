@@ -316,7 +316,7 @@ fn vector<S: pulp::Simd, const W: usize>(
     p: S::f32s,
     nb: [S::f32s; W],
     (axes, k): &PhaseConsts<S, W>,
-    [a, b]: [S::f32s; 2],
+    [a, b, tiny]: [S::f32s; 3],
     change: &mut [S::f32s; 2],
 ) -> S::f32s {
     let pair = |ax: usize| {
@@ -337,6 +337,9 @@ fn vector<S: pulp::Simd, const W: usize>(
     let floor = simd.min_f32s(lo, p);
     let ceil = simd.max_f32s(hi, p);
     let q = simd.min_f32s(simd.max_f32s(target, floor), ceil);
+    // Coordinates that relaxation drives toward zero (a sheet's out-of-plane ones) would otherwise
+    // decay through the subnormal range, where each operation costs a hundred cycles.
+    let q = simd.sub_f32s(simd.add_f32s(q, tiny), tiny);
     let d = simd.sub_f32s(q, p);
     change[0] = simd.max_f32s(change[0], d);
     change[1] = simd.min_f32s(change[1], d);
@@ -470,6 +473,11 @@ impl<const W: usize> pulp::WithSimd for Band<'_, W> {
         if lanes > change { lanes } else { change }
     }
 }
+
+/// Added to and taken from every relaxed coordinate: values under `2^-84` become 0 and values
+/// under `2^-36` are rounded to multiples of `2^-83`, so that no coordinate is subnormal; larger
+/// values are unchanged (the sum rounds back to them exactly).
+pub(crate) const FLUSH: f32 = 8.673617e-19; // 2^-60
 
 /// Bodies of fewer elements sweep on one thread: a second one costs more to start than it saves.
 const PARALLEL_MIN: usize = 1 << 15;
@@ -726,7 +734,7 @@ fn relax_run<S: pulp::Simd, const W: usize>(
         let Some(s) = window.stream(st.offs[t], first, n) else { return };
         *nb = s;
     }
-    let weights = [simd.splat_f32s(1.0 - OMEGA), simd.splat_f32s(OMEGA / W as f32)];
+    let weights = [simd.splat_f32s(1.0 - OMEGA), simd.splat_f32s(OMEGA / W as f32), simd.splat_f32s(FLUSH)];
     // Whole groups of three vectors, straight from the streams. Plain loops and indexing: a
     // closure would not inherit the instruction set, and each vector operation would be a call.
     let pv = S::as_simd_f32s(p).0;
