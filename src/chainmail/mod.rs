@@ -20,10 +20,13 @@
 //! grids it walks memory row by row.
 //!
 //! ## Grid fast paths
-//! Grids keep a stencil (`stencil.rs`) beside the generic rows: interior elements find their chain-reaction
-//! neighbours by offset, and whole-body relaxation sweeps relax runs of regular elements in SIMD blocks.
-//! Both give the generic path's result bit for bit (`tests/chainmail_reference.rs` checks it); anything
-//! irregular (borders, seams, cuts, pins, other materials) takes the generic path.
+//! Grids keep a stencil (`stencil.rs`) beside the generic rows. Interior elements find their
+//! chain-reaction neighbours by offset, with the generic path's result bit for bit. Whole-body
+//! relaxation sweeps work in place, in bands of rows or layers on the thread pool, and relax runs of
+//! regular elements a SIMD vector at a time; they agree with the generic path to the rounding of the
+//! coordinates (regular elements take a uniform grid's rest offsets as cancelling). Both are checked
+//! against the generic path in `tests/chainmail_reference.rs`; anything irregular (borders, seams,
+//! cuts, pins, other materials) takes the generic path.
 
 mod body;
 mod deform;

@@ -156,7 +156,8 @@ impl Stencil {
         let offsets = body.lattice.rest_offset.iter();
         let shortest =
             offsets.map(|o| o.iter().fold(0.0f32, |m, &c| m.max(c.abs()))).fold(f32::INFINITY, f32::min);
-        let same_box = 8.0 * f32::EPSILON * (1.0 + largest / shortest);
+        // Capped at one part in a thousand: boxes further apart are different materials.
+        let same_box = (8.0 * f32::EPSILON * (1.0 + largest / shortest)).min(1e-3);
         Some(Self {
             dims,
             offs,
