@@ -509,8 +509,11 @@ impl Body {
         }
         let slabs = n / slab;
         let threads = if n >= PARALLEL_MIN { rayon::current_num_threads() } else { 1 };
+        // Two bands per thread, so that a thread slowed by the rest of the machine leaves more to the
+        // other; one thread sweeps alone.
         let mut depth = 0;
-        while (1 << (depth + 1)) <= 2 * threads
+        while threads > 1
+            && (1 << (depth + 1)) <= 2 * threads
             && slabs >> (depth + 1) >= BAND_MIN
             && scratch_slabs(depth + 1) * slab <= scratch.len()
         {
