@@ -551,8 +551,15 @@ impl Body {
         let half = region.len() / slab / 2;
         if depth == 0 || half == 0 {
             // Each band is compiled once per instruction set and the widest the CPU has is chosen
-            // at run time (AVX-512 or AVX2 on x86-64, single floats elsewhere).
+            // at run time (AVX-512 or AVX2 on x86-64, single floats elsewhere). Rows too short for
+            // AVX-512's sixteen elements take AVX2's eight.
             let band = Band::<W> { body: self, stencil: st, first, region, prev, next, scratch };
+            #[cfg(target_arch = "x86_64")]
+            if st.dims[0] < 2 + 16
+                && let Some(v3) = pulp::x86::V3::try_new()
+            {
+                return pulp::Simd::vectorize(v3, band);
+            }
             return pulp::Arch::new().dispatch(band);
         }
         let (halos, rest) = scratch.split_at_mut(2 * slab);
