@@ -96,11 +96,15 @@ fn majority(values: impl Iterator<Item = u32>) -> u32 {
     value
 }
 
+/// Whether two bounds are equal to within `tolerance` (relative), infinities only to themselves.
+fn close(x: f32, y: f32, tolerance: f32) -> bool {
+    x == y || (x - y).abs() <= tolerance * x.abs().max(y.abs())
+}
+
 /// Whether two classes have boxes equal to within `tolerance` (relative).
 fn same_box(a: &SlotClass, b: &SlotClass, tolerance: f32) -> bool {
-    let close = |x: f32, y: f32| x == y || (x - y).abs() <= tolerance * x.abs().max(y.abs());
     let (a, b) = (a.bounds.as_flattened(), b.bounds.as_flattened());
-    a.iter().zip(b).all(|(&x, &y)| close(x, y))
+    a.iter().zip(b).all(|(&x, &y)| close(x, y, tolerance))
 }
 
 impl Stencil {
@@ -261,8 +265,7 @@ impl Stencil {
                 let lanes = |b: [f32; 3]| std::array::from_fn(|e| b[e % 3]);
                 let block = [lanes(c.bounds[0]), lanes(c.bounds[1])];
                 let same = |b: &[Lanes; 2]| {
-                    let close = |x: f32, y: f32| x == y || (x - y).abs() <= tolerance * x.abs().max(y.abs());
-                    b.as_flattened().iter().zip(block.as_flattened()).all(|(&x, &y)| close(x, y))
+                    b.as_flattened().iter().zip(block.as_flattened()).all(|(&x, &y)| close(x, y, tolerance))
                 };
                 let index = match self.row_blocks.iter().position(same) {
                     Some(index) => index,
@@ -360,8 +363,7 @@ fn shift_lanes(lo0: &Lanes, hi0: &Lanes, lo1: &Lanes, hi1: &Lanes, tolerance: f3
         } else {
             0.0
         };
-        let close = |x: f32, y: f32| x == y || (x - y).abs() <= tolerance * x.abs().max(y.abs());
-        if !(close(a + s, c) && close(b + s, d)) {
+        if !(close(a + s, c, tolerance) && close(b + s, d, tolerance)) {
             return None;
         }
         shift[l] = s;
