@@ -506,6 +506,8 @@ fn batch<const MASK: u8>(
             }
         };
         match b.offs.get(u) {
+            // Back toward the sponsors, which have all moved: nothing to push.
+            Some(&back) if all_interior && back == -o => {}
             // Along the run only its ends can have a neighbour outside it.
             Some(&o) if all_interior && o.unsigned_abs() == 1 => {
                 for c in [c0, c0 + m - 1] {
