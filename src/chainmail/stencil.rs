@@ -669,8 +669,14 @@ impl Body {
                 let len =
                     if whole { nx - 2 } else { regular[x - 1..].iter().take_while(|&&r| r == 1).count() };
                 if len >= S::F32_LANES {
-                    let out = &mut out[row + x - base..];
-                    relax_run::<S, W>(simd, st, window, row + x - base, len, consts, out, lane_change);
+                    let run = &mut out[row + x - base..];
+                    // A run whose streams are not all there (never, on a stencil's grid) is done one
+                    // element at a time instead.
+                    if !relax_run::<S, W>(simd, st, window, row + x - base, len, consts, run, lane_change) {
+                        for i in row + x..row + x + len {
+                            generic(i, out, change);
+                        }
+                    }
                     x += len;
                 } else {
                     let end = x + len.max(1);
@@ -726,6 +732,7 @@ impl Body {
 /// Relaxes the `len` (at least `S::F32_LANES`) regular elements from element `first` of the
 /// window's slab into `out` (starting at `first`'s place), three vectors at a time; the last three
 /// are moved back to end with the run, overlapping their neighbours (computed twice, alike).
+/// Returns `false`, with the run not (or not all) written, if a stream is missing.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn relax_run<S: pulp::Simd, const W: usize>(
@@ -737,14 +744,14 @@ fn relax_run<S: pulp::Simd, const W: usize>(
     consts: &[PhaseConsts<S, W>; 3],
     out: &mut [[f32; 3]],
     lane_change: &mut [S::f32s; 2],
-) {
+) -> bool {
     let (n, g) = (3 * len, 3 * S::F32_LANES);
     let (Some(p), Some(out)) = (window.stream(0, first, n), out.as_flattened_mut().get_mut(..n)) else {
-        return;
+        return false;
     };
     let mut nbrs: [&[f32]; W] = [&[]; W];
     for (t, nb) in nbrs.iter_mut().enumerate() {
-        let Some(s) = window.stream(st.offs[t], first, n) else { return };
+        let Some(s) = window.stream(st.offs[t], first, n) else { return false };
         *nb = s;
     }
     let weights = [simd.splat_f32s(1.0 - OMEGA), simd.splat_f32s(OMEGA / W as f32), simd.splat_f32s(FLUSH)];
@@ -758,7 +765,7 @@ fn relax_run<S: pulp::Simd, const W: usize>(
     }
     let ov = S::as_mut_simd_f32s(out).0;
     if ov.len() != m || nv.iter().any(|v| v.len() != m) {
-        return;
+        return false;
     }
     let whole = m - m % 3;
     let mut nb = [simd.splat_f32s(0.0); W];
@@ -775,14 +782,14 @@ fn relax_run<S: pulp::Simd, const W: usize>(
     }
     *lane_change = change;
     if whole * S::F32_LANES == n {
-        return;
+        return true;
     }
     // The rest: one group moved back to end with the run.
     let last = n - g;
-    let (Some(pk), Some(o)) = (load3::<S>(p, last), out.get_mut(last..last + g)) else { return };
+    let (Some(pk), Some(o)) = (load3::<S>(p, last), out.get_mut(last..last + g)) else { return false };
     let mut nbs = [pk; W];
     for t in 0..W {
-        let Some(v) = load3::<S>(nbrs[t], last) else { return };
+        let Some(v) = load3::<S>(nbrs[t], last) else { return false };
         nbs[t] = v;
     }
     let (head, _) = S::as_mut_simd_f32s(o);
@@ -792,6 +799,7 @@ fn relax_run<S: pulp::Simd, const W: usize>(
         }
         *slot = vector::<S, W>(simd, pk[v], nb, consts, weights, lane_change);
     }
+    true
 }
 
 #[cfg(test)]
