@@ -327,6 +327,15 @@ fn same(a: &[[f32; 3]], b: &[[f32; 3]]) -> bool {
     a.iter().zip(b).all(|(p, q)| p == q)
 }
 
+/// Puts the first body on the second one's positions, so that the next move starts both alike: a soft
+/// chain reaction can turn a difference in the last bits into a different sponsor, and so a different
+/// shape.
+fn take_positions([to, from]: &mut [Body; 2]) {
+    for (i, &q) in from.positions().iter().enumerate() {
+        to.set_position(ElementId(i as u32), q).expect("position");
+    }
+}
+
 /// The largest coordinate difference between two sets of positions.
 fn largest_gap(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
     a.iter().flatten().zip(b.iter().flatten()).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
@@ -432,12 +441,7 @@ proptest! {
             prop_assert!((reports[0].last_change - reports[1].last_change).abs() <= tolerance);
             let gap = largest_gap(bodies[0].positions(), bodies[1].positions());
             prop_assert!(gap <= tolerance, "stencil and generic sweeps differ by {gap} (tolerance {tolerance})");
-            // The next move starts both from the same positions: a soft chain reaction can turn a
-            // difference in the last bits into a different sponsor, and so a different shape.
-            let common = bodies[1].positions().to_vec();
-            for (i, &q) in common.iter().enumerate() {
-                bodies[0].set_position(ElementId(i as u32), q).expect("position");
-            }
+            take_positions(&mut bodies);
         }
     }
 }
@@ -479,10 +483,7 @@ fn banded_sweeps_match_the_generic_path() {
                     gap <= tolerance,
                     "{dims:?} on {threads} threads: differ by {gap} (tolerance {tolerance})"
                 );
-                let common = bodies[1].positions().to_vec();
-                for (i, &q) in common.iter().enumerate() {
-                    bodies[0].set_position(ElementId(i as u32), q).expect("position");
-                }
+                take_positions(&mut bodies);
             }
         }
     }

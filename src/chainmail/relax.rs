@@ -94,29 +94,36 @@ impl Body {
         report
     }
 
-    /// The relaxed position of element `i`: where it is if pinned or held, else [`Body::relaxed`].
+    /// The relaxed position of element `i`: where it is if pinned or held, else [`Body::relaxed_in`]
+    /// over the body's positions.
     #[inline(always)]
     pub(crate) fn relaxed_unless_fixed(&self, i: usize) -> [f32; 3] {
-        if self.flags[i] & FIXED != 0 { self.pos[i] } else { self.relaxed(i) }
+        self.relaxed_in(i, |j| self.pos[j])
     }
 
-    /// The relaxed position of element `i` (assumed free): a damped Jacobi step toward the weighted mean
-    /// displacement of its neighbours, shortened per coordinate where it would leave the constraint boxes
-    /// of its intact links (the box of each link taken at the neighbour's current position). A step is
-    /// only ever shortened, never reversed, so the energy still cannot rise (each coordinate's step is
-    /// the Jacobi step scaled by a factor in `[0, 1]`, and `ω ≤ 1`).
+    /// The relaxed position of element `i`, positions read through `pos_of` (a sweep working in place
+    /// reads its neighbours' old positions from where it keeps them). Pinned and held elements stay
+    /// where they are. A free one takes a damped Jacobi step toward the weighted mean displacement of
+    /// its neighbours, shortened per coordinate where it would leave the constraint boxes of its
+    /// intact links (the box of each link taken at the neighbour's current position). A step is only
+    /// ever shortened, never reversed, so the energy still cannot rise (each coordinate's step is the
+    /// Jacobi step scaled by a factor in `[0, 1]`, and `ω ≤ 1`).
     #[inline(always)]
-    pub(crate) fn relaxed(&self, i: usize) -> [f32; 3] {
-        let w = self.width;
+    pub(crate) fn relaxed_in(&self, i: usize, pos_of: impl Fn(usize) -> [f32; 3]) -> [f32; 3] {
+        let p = pos_of(i);
+        if self.flags[i] & FIXED != 0 {
+            return p;
+        }
+        let (w, rest) = (self.width, &self.lattice.rest);
         let row = i * w..(i + 1) * w;
-        relaxed_row(
-            &self.pos,
-            &self.lattice.rest,
-            self.pos[i],
-            self.lattice.rest[i],
+        relaxed_with(
+            pos_of,
+            p,
+            rest[i],
             &self.slot_nbr[row.clone()],
-            &self.classes,
             &self.slot_class[row],
+            &self.classes,
+            |_, j| rest[j],
         )
     }
 

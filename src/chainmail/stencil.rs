@@ -12,13 +12,14 @@
 //! row loop; the two agree up to rounding.
 //!
 //! On a uniform grid the rest length `c[i + 1] - c[i]` varies in its last bits from column to column
-//! (the coordinates are rounded), and with it the boxes of a relative material. x-links whose boxes
-//! agree with the most common one to within that rounding count as the same: the sweep clamps to the
-//! common box, a few units in the last place of the coordinates off the link's own.
+//! and row to row (the coordinates are rounded), and with it the boxes of a relative material. Boxes
+//! that agree to within that rounding count as the same: the sweep clamps to a common box, a few units
+//! in the last place of the coordinates off the link's own.
 //!
-//! The sweep reads the old positions and writes the new ones to a second array (a Jacobi sweep), so
-//! bands of slabs (rows of a sheet, layers of a volume) can be computed on several threads at once
-//! with the same result. Regular elements read no rest positions.
+//! The sweep works in place (see [`Body::sweep_stencil`]): slab by slab (rows of a sheet, layers of a
+//! volume), each written back once the next is computed, so every element reads its neighbours' old
+//! positions (a Jacobi sweep). Large bodies are cut into bands of slabs swept on the thread pool with
+//! halo copies of the slabs beyond their ends, with the same result.
 
 use super::body::{Body, FIXED, SlotClass};
 use super::relax::{OMEGA, relaxed_with};
@@ -256,22 +257,20 @@ impl Stencil {
         // shared, so that on a uniform grid every row has the same blocks.
         self.row_blocks.clear();
         self.row_block_of.clear();
-        let tolerance = self.same_box;
+        // The class each block was made from.
+        let mut made_from: Vec<SlotClass> = Vec::new();
         for (t, pattern) in self.pattern.iter().enumerate() {
             let used = if t < 2 { std::slice::from_ref(&self.x_class[t]) } else { &pattern[..] };
             let mut of = Vec::with_capacity(used.len());
             for &class in used {
                 let c = classes[class as usize];
-                let lanes = |b: [f32; 3]| std::array::from_fn(|e| b[e % 3]);
-                let block = [lanes(c.bounds[0]), lanes(c.bounds[1])];
-                let same = |b: &[Lanes; 2]| {
-                    b.as_flattened().iter().zip(block.as_flattened()).all(|(&x, &y)| close(x, y, tolerance))
-                };
-                let index = match self.row_blocks.iter().position(same) {
+                let index = match made_from.iter().position(|b| same_box(b, &c, self.same_box)) {
                     Some(index) => index,
                     None => {
-                        self.row_blocks.push(block);
-                        self.row_blocks.len() - 1
+                        let lanes = |b: [f32; 3]| std::array::from_fn(|e| b[e % 3]);
+                        self.row_blocks.push([lanes(c.bounds[0]), lanes(c.bounds[1])]);
+                        made_from.push(c);
+                        made_from.len() - 1
                     }
                 };
                 of.push(index as u32);
@@ -604,17 +603,10 @@ impl Body {
         let [nx, ny, nz] = st.dims;
         let base = window.s * st.slab;
         let w = self.width;
-        let (rest, classes) = (&self.lattice.rest, &self.classes);
+        let classes = &self.classes;
         let pos_of = |j: usize| window.pos(j);
         let generic = |i: usize, out: &mut [[f32; 3]], change: &mut f32| {
-            let p = pos_of(i);
-            let q = if self.flags[i] & FIXED != 0 {
-                p
-            } else {
-                let (nbrs, slot_class) =
-                    (&self.slot_nbr[i * w..(i + 1) * w], &self.slot_class[i * w..(i + 1) * w]);
-                relaxed_with(pos_of, p, rest[i], nbrs, slot_class, classes, |_, j| rest[j])
-            };
+            let (p, q) = (pos_of(i), self.relaxed_in(i, pos_of));
             *change = super::relax::max_change(*change, p, q);
             out[i - base] = q;
         };
