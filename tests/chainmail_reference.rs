@@ -12,6 +12,9 @@ use dissect::chainmail::{
 use proptest::prelude::*;
 
 const OMEGA: f32 = 0.9;
+/// 2^-60, added to and taken from every relaxed coordinate: relaxation rounds values under 2^-36 to
+/// multiples of 2^-83, so that no coordinate is subnormal.
+const FLUSH: f32 = 8.673617e-19;
 
 fn mask(pass: Pass) -> [bool; 3] {
     match pass {
@@ -197,7 +200,8 @@ fn reference_sweep(body: &Body, pos: &mut [[f32; 3]], elements: Option<&[usize]>
         let inv = OMEGA / wsum;
         for c in 0..3 {
             let target = p[c] + (acc[c] * inv - OMEGA * (p[c] - r[c]));
-            next[i][c] = target.max(lo[c].min(p[c])).min(hi[c].max(p[c]));
+            let q = target.max(lo[c].min(p[c])).min(hi[c].max(p[c]));
+            next[i][c] = (q + FLUSH) - FLUSH;
         }
     }
     pos.copy_from_slice(&next);
@@ -215,13 +219,16 @@ struct Case {
 }
 
 fn case() -> impl Strategy<Value = Case> {
-    (0u8..4, 2usize..8, 2usize..8, prop_oneof![Just(1usize), 2usize..4])
+    // Some grids wide enough for the chain reaction's runs to fill whole chunks (16 elements), and
+    // some rigid materials, which carry a move across the whole grid.
+    let side = || prop_oneof![3 => 2usize..8, 1 => 17usize..40];
+    (0u8..4, side(), side(), prop_oneof![Just(1usize), 2usize..4])
         .prop_flat_map(|(kind, nx, ny, nz)| {
             let n = (nx * ny * nz) as u32;
             (
                 Just(kind),
                 Just([nx, ny, nz]),
-                (1.0f32..1.6, 0.5f32..1.0, 0.0f32..0.5),
+                prop_oneof![3 => (1.0f32..1.6, 0.5f32..1.0, 0.0f32..0.5), 1 => Just((1.0, 1.0, 0.0))],
                 proptest::collection::vec(0..n, 0..3),
                 proptest::collection::vec(0..n, 0..2),
                 proptest::collection::vec(0u32..10_000, 0..5),
@@ -365,6 +372,17 @@ proptest! {
                 body.relax(&mut ws, RelaxBudget::sweeps(2), RelaxRegion::All);
                 reference_sweep(&body, &mut pos, None);
                 reference_sweep(&body, &mut pos, None);
+                // Whole-body sweeps on wide grids take the stencil's fast path, which agrees with the
+                // reference up to rounding (see `grid_sweeps_match_the_generic_path`): checked to that
+                // tolerance, then the reference takes the engine's positions, so that the next
+                // deformation starts alike and is again compared bit for bit.
+                if c.dims.iter().any(|&d| d >= 8) {
+                    let extent = c.dims.iter().max().copied().unwrap_or(1) as f32 * 0.01;
+                    let tolerance = 64.0 * f32::EPSILON * extent;
+                    let gap = largest_gap(body.positions(), &pos);
+                    prop_assert!(gap <= tolerance, "sweeps differ by {} (tolerance {})", gap, tolerance);
+                    pos.copy_from_slice(body.positions());
+                }
             } else {
                 body.relax(&mut ws, RelaxBudget::sweeps(2), RelaxRegion::Moved);
                 reference_sweep(&body, &mut pos, Some(&moved));

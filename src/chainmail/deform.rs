@@ -212,10 +212,13 @@ impl Body {
     /// workspace); when a fixed element would have to move, everything is rolled back and `false`
     /// returned.
     fn chain_reaction(&mut self, ws: &mut Workspace, source: usize, goal: [f32; 3], mask: [bool; 3]) -> bool {
+        // Compiled for the widest vectors the machine has (pulp picks at run time): the runs' checks
+        // are written as plain loops over lanes and vectorise.
+        let arch = pulp::Arch::new();
         match mask {
-            [true, true, true] => self.chain_reaction_in::<0b111>(ws, source, goal),
-            [true, true, false] => self.chain_reaction_in::<0b011>(ws, source, goal),
-            [false, false, true] => self.chain_reaction_in::<0b100>(ws, source, goal),
+            [true, true, true] => arch.dispatch(Reaction::<0b111> { body: self, ws, source, goal }),
+            [true, true, false] => arch.dispatch(Reaction::<0b011> { body: self, ws, source, goal }),
+            [false, false, true] => arch.dispatch(Reaction::<0b100> { body: self, ws, source, goal }),
             _ => unreachable!("Pass::mask gives one of three masks"),
         }
     }
@@ -230,6 +233,7 @@ impl Body {
     /// against it (both positions are final by then: the sponsor has moved, the candidate has not).
     /// The walk runs along grid rows, so memory is read in order, and the moves, their order and
     /// their sponsors are those of per-direction FIFO lists of `(candidate, link, sponsor)` entries.
+    #[inline(always)]
     fn chain_reaction_in<const MASK: u8>(
         &mut self,
         ws: &mut Workspace,
@@ -295,7 +299,7 @@ impl Body {
             tail[t] = 1;
         }
 
-        let mut run_positions = [[0.0f32; 3]; RUN];
+        let mut pattern = Pattern::default();
         let mut blocked = false;
         'reaction: loop {
             let mut progressed = false;
@@ -319,7 +323,7 @@ impl Body {
                             moved,
                             lists,
                             tail,
-                            &mut run_positions,
+                            &mut pattern,
                         );
                         if done > 0 {
                             head[t] += done;
@@ -385,6 +389,23 @@ impl Body {
     }
 }
 
+/// One chain reaction, as an operation for [`pulp::Arch::dispatch`].
+struct Reaction<'a, const MASK: u8> {
+    body: &'a mut Body,
+    ws: &'a mut Workspace,
+    source: usize,
+    goal: [f32; 3],
+}
+
+impl<const MASK: u8> pulp::WithSimd for Reaction<'_, MASK> {
+    type Output = bool;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> bool {
+        self.body.chain_reaction_in::<MASK>(self.ws, self.source, self.goal)
+    }
+}
+
 /// Where a run of a candidate list starts, for [`batch`].
 struct Run {
     /// Start of the list in the workspace's list buffer.
@@ -426,13 +447,109 @@ impl Slices<'_> {
 /// Longest run moved at once.
 const RUN: usize = 64;
 
+/// Elements a run checks and writes at once, without branches (a multiple of the vector widths).
+const CHUNK: usize = 16;
+
+/// A class's bounds laid out for [`check_chunk`]: lane `j` holds coordinate `j % 3`; coordinates the
+/// pass leaves alone get infinite bounds, so the clamp leaves them alone too.
+struct Pattern {
+    class: u32,
+    lo: [f32; 3 * CHUNK],
+    hi: [f32; 3 * CHUNK],
+}
+
+impl Default for Pattern {
+    fn default() -> Self {
+        Self { class: u32::MAX, lo: [0.0; 3 * CHUNK], hi: [0.0; 3 * CHUNK] }
+    }
+}
+
+impl Pattern {
+    fn of<const MASK: u8>(class: u32, c: &super::body::SlotClass) -> Self {
+        let [lo, hi] = c.bounds;
+        let mut p = Self { class, ..Self::default() };
+        for j in 0..3 * CHUNK {
+            let k = j % 3;
+            let on = MASK & (1 << k) != 0;
+            p.lo[j] = if on { lo[k] } else { f32::NEG_INFINITY };
+            p.hi[j] = if on { hi[k] } else { f32::INFINITY };
+        }
+        p
+    }
+}
+
+/// Sixteen bytes as one word, for checking byte flags sixteen at a time.
+#[inline(always)]
+fn word(bytes: &[u8]) -> Option<u128> {
+    bytes.first_chunk::<CHUNK>().map(|b| u128::from_le_bytes(*b))
+}
+
+/// How many leading elements of a chunk pass the one-by-one path's checks, for sponsors `s..s + CHUNK`
+/// (list entries `entries`) and candidates `c..c + CHUNK` through slot `t` of class `bounds.class`:
+/// entry in sequence, sponsor and candidate interior, candidate not moved and free, sponsor's link of
+/// that class, candidate pushed out of its box. The candidates' clamped positions go to `q`. Every
+/// check runs on every lane without a branch, so the loops vectorise; the first failure is read off
+/// the bit masks. All ranges must be in bounds (else 0).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn check_chunk<const MASK: u8>(
+    b: Slices<'_>,
+    entries: &[u32],
+    (s, c, t, g): (usize, usize, usize, u32),
+    stamp: &[u32],
+    pos: &[[f32; 3]],
+    bounds: &Pattern,
+    q: &mut [f32; 3 * CHUNK],
+) -> usize {
+    let w = b.width;
+    let (Some(entries), Some(stamps), Some(classes), Some(ps), Some(pc)) = (
+        entries.first_chunk::<CHUNK>(),
+        stamp.get(c..).and_then(<[u32]>::first_chunk::<CHUNK>),
+        b.slot_class.get(s * w..(s + CHUNK) * w),
+        pos.get(s..).and_then(<[[f32; 3]]>::first_chunk::<CHUNK>),
+        pos.get(c..).and_then(<[[f32; 3]]>::first_chunk::<CHUNK>),
+    ) else {
+        return 0;
+    };
+    let (Some(inner_s), Some(inner_c), Some(flags)) = (
+        word(&b.interior[s.min(b.interior.len())..]),
+        word(&b.interior[c.min(b.interior.len())..]),
+        word(&b.flags[c..]),
+    ) else {
+        return 0;
+    };
+    // Bytes: interior flags are 0 or 1, so `x ^ ONES` is non-zero exactly where one is 0.
+    const ONES: u128 = u128::MAX / 255;
+    let bad_bytes = (inner_s ^ ONES) | (inner_c ^ ONES) | (flags & (ONES * FIXED as u128));
+    let mut bad = 0u32;
+    for k in 0..CHUNK {
+        let fail = (entries[k] != (s + k) as u32) | (stamps[k] == g) | (classes[k * w + t] != bounds.class);
+        bad |= (fail as u32) << k;
+    }
+    let (ps, pc) = (ps.as_flattened(), pc.as_flattened());
+    let mut same = 0u64;
+    for j in 0..3 * CHUNK {
+        // As `clamp_masked`: `p[c]` into `[p[s] - hi, p[s] - lo]`.
+        let (lo, hi) = (ps[j] - bounds.hi[j], ps[j] - bounds.lo[j]);
+        let x = if pc[j] < lo { lo } else { pc[j] };
+        let x = if x > hi { hi } else { x };
+        q[j] = x;
+        same |= ((x == pc[j]) as u64) << j;
+    }
+    // An element stays put when all three of its lanes do.
+    let still = same & (same >> 1) & (same >> 2) & 0o1111_1111_1111_1111;
+    let first_bad_byte = bad_bytes.trailing_zeros() as usize / 8;
+    (bad.trailing_zeros() as usize).min(first_bad_byte).min(still.trailing_zeros() as usize / 3).min(CHUNK)
+}
+
 /// Moves a run of candidates at once: list entries `s, s + 1, ...` (interior sponsors), whose
-/// candidates `s + o, s + o + 1, ...` lie in another row, are free, have not moved and must move.
-/// Processed one by one they would not affect each other, so the run is checked first, then its moves
-/// are written in bulk. List entries are written as one by one, except those whose neighbour is in
-/// the run: that neighbour has moved by the time the entry would be read, so the entry could only be
-/// skipped. Returns how many entries were consumed (0: take the one-by-one path for the next entry;
-/// 1 with nothing written: its candidate had moved already, as the one-by-one path would find).
+/// candidates `s + o, s + o + 1, ...` lie in another row, are interior, free, have not moved and must
+/// move. Processed one by one they would not affect each other, so the run is checked and written a
+/// chunk at a time. List entries are written as one by one, except those whose neighbour is in the
+/// run or among the sponsors: that neighbour has moved by the time the entry would be read, so the
+/// entry could only be skipped. Returns how many entries were consumed (0: take the one-by-one path
+/// for the next entry; 1 with nothing written: its candidate had moved already, as the one-by-one
+/// path would find).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn batch<const MASK: u8>(
@@ -445,7 +562,7 @@ fn batch<const MASK: u8>(
     moved: &mut Vec<u32>,
     lists: &mut [u32],
     tail: &mut [usize],
-    q: &mut [[f32; 3]; RUN],
+    bounds: &mut Pattern,
 ) -> usize {
     let &Run { list, head, tail: end, t, o, g } = run;
     let width = b.width;
@@ -459,73 +576,131 @@ fn batch<const MASK: u8>(
     if stamp.get(c0) == Some(&g) {
         return 1;
     }
-    let mut m = 0;
-    while m < RUN && head + m < end {
-        let s = s0 + m;
-        let c = c0.wrapping_add(m);
-        if lists[list + head + m] as usize != s
-            || b.interior.get(s) != Some(&1)
-            || c >= n
-            || stamp[c] == g
-            || b.flags[c] & FIXED != 0
-        {
-            break;
-        }
-        let ps = pos[s];
-        let [elo, ehi] = b.classes[b.slot_class[s * width + t] as usize].bounds;
-        let blo = [ps[0] - ehi[0], ps[1] - ehi[1], ps[2] - ehi[2]];
-        let bhi = [ps[0] - elo[0], ps[1] - elo[1], ps[2] - elo[2]];
-        let pc = pos[c];
-        q[m] = clamp_masked::<MASK>(pc, blo, bhi);
-        if q[m] == pc {
-            break;
-        }
-        m += 1;
+    let Some(&cls) = b.slot_class.get(s0 * width + t) else {
+        return 0;
+    };
+    if bounds.class != cls {
+        *bounds = Pattern::of::<MASK>(cls, &b.classes[cls as usize]);
     }
-    if m < 2 {
+    let mut m = 0;
+    let mut q = [0.0f32; 3 * CHUNK];
+    while m < RUN {
+        let (s, c) = (s0 + m, c0.wrapping_add(m));
+        let k = if head + m + CHUNK <= end {
+            check_chunk::<MASK>(
+                b,
+                &lists[list + head + m..list + end],
+                (s, c, t, g),
+                stamp,
+                pos,
+                bounds,
+                &mut q,
+            )
+        } else {
+            0
+        };
+        let k = if k > 0 {
+            k
+        } else {
+            // Near the list's end: one element, checked as one by one.
+            let ok = head + m < end
+                && lists[list + head + m] as usize == s
+                && b.interior.get(s) == Some(&1)
+                && b.interior.get(c) == Some(&1)
+                && stamp[c] != g
+                && b.flags[c] & FIXED == 0
+                && b.slot_class[s * width + t] == cls;
+            if !ok {
+                break;
+            }
+            let [elo, ehi] = b.classes[cls as usize].bounds;
+            let ps = pos[s];
+            let blo = [ps[0] - ehi[0], ps[1] - ehi[1], ps[2] - ehi[2]];
+            let bhi = [ps[0] - elo[0], ps[1] - elo[1], ps[2] - elo[2]];
+            let x = clamp_masked::<MASK>(pos[c], blo, bhi);
+            if x == pos[c] {
+                break;
+            }
+            q[..3].copy_from_slice(&x);
+            1
+        };
+        if m + k < 2 {
+            // Fewer than two: the one-by-one path does it as cheaply.
+            return 0;
+        }
+        let cs = c..c + k;
+        if k == CHUNK {
+            // Fixed lengths, so the copies are vector moves rather than calls.
+            let (Some(old), Some(now), Some(st), Some(sp)) = (
+                old.get_mut(c..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
+                pos.get_mut(c..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
+                stamp.get_mut(c..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+                sponsor.get_mut(c..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+            ) else {
+                break;
+            };
+            *old = *now;
+            now.as_flattened_mut().copy_from_slice(&q);
+            *st = [g; CHUNK];
+            *sp = std::array::from_fn(|j| (s + j) as u32);
+            moved.extend_from_slice(&std::array::from_fn::<u32, CHUNK, _>(|j| (c + j) as u32));
+        } else {
+            for (j, c) in cs.clone().enumerate() {
+                old[c] = pos[c];
+                pos[c] = [q[3 * j], q[3 * j + 1], q[3 * j + 2]];
+                stamp[c] = g;
+                sponsor[c] = (s + j) as u32;
+                moved.push(c as u32);
+            }
+        }
+        // Pushes across rows, away from the sponsors (no neighbour in the run there: the candidates
+        // are interior and distinct rows apart), written without a branch: each slot takes the entry,
+        // the end advances only for unmoved neighbours (the list has room: `c` is not in it yet).
+        for (u, tail) in tail.iter_mut().enumerate().take(width) {
+            let ou = b.offs[u];
+            if ou == -o || ou.unsigned_abs() == 1 {
+                continue;
+            }
+            let mut end = *tail;
+            let list = &mut lists[u * n..(u + 1) * n];
+            // In range: the candidates are interior.
+            let d = c.wrapping_add_signed(ou);
+            let ds = &stamp[d..d + k];
+            if ds.iter().fold(true, |a, &x| a & (x != g)) && end + k <= n {
+                for (j, e) in list[end..end + k].iter_mut().enumerate() {
+                    *e = (c + j) as u32;
+                }
+                end += k;
+            } else {
+                for (j, &x) in ds.iter().enumerate() {
+                    list[end] = (c + j) as u32;
+                    end += (x != g) as usize;
+                }
+            }
+            *tail = end;
+        }
+        m += k;
+        if k < CHUNK {
+            break;
+        }
+    }
+    if m == 0 {
         return 0;
     }
+    // Along the row only the run's two ends can have a neighbour outside it; back toward the sponsors
+    // every neighbour has moved.
     let run = c0..c0 + m;
-    old[run.clone()].copy_from_slice(&pos[run.clone()]);
-    pos[run.clone()].copy_from_slice(&q[..m]);
-    stamp[run.clone()].fill(g);
-    for (k, sp) in sponsor[run.clone()].iter_mut().enumerate() {
-        *sp = (s0 + k) as u32;
-    }
-    moved.extend(run.clone().map(|c| c as u32));
-    let all_interior = b.interior.get(run.clone()).is_some_and(|r| r.iter().all(|&i| i == 1));
     for (u, tail) in tail.iter_mut().enumerate().take(width) {
-        // The list's end in a local, not behind the reference: a store and a reload per entry
-        // would chain every push to the one before.
-        let mut end = *tail;
-        let list = &mut lists[u * n..(u + 1) * n];
-        let mut push = |c: usize, d: usize| {
-            if !run.contains(&d) && stamp.get(d) != Some(&g) {
-                list[end] = c as u32;
-                end += 1;
-            }
-        };
-        match b.offs.get(u) {
-            // Back toward the sponsors, which have all moved: nothing to push.
-            Some(&back) if all_interior && back == -o => {}
-            // Along the run only its ends can have a neighbour outside it.
-            Some(&o) if all_interior && o.unsigned_abs() == 1 => {
-                for c in [c0, c0 + m - 1] {
-                    push(c, c.wrapping_add_signed(o));
-                }
-            }
-            Some(&o) if all_interior => {
-                for c in run.clone() {
-                    push(c, c.wrapping_add_signed(o));
-                }
-            }
-            _ => {
-                for c in run.clone() {
-                    push(c, b.neighbour(c, u));
+        let ou = b.offs[u];
+        if ou.unsigned_abs() == 1 {
+            for c in [c0, c0 + m - 1] {
+                let d = c.wrapping_add_signed(ou);
+                if !run.contains(&d) && stamp.get(d) != Some(&g) {
+                    lists[u * n + *tail] = c as u32;
+                    *tail += 1;
                 }
             }
         }
-        *tail = end;
     }
     m
 }
