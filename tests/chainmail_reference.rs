@@ -231,7 +231,7 @@ fn case() -> impl Strategy<Value = Case> {
                 prop_oneof![3 => (1.0f32..1.6, 0.5f32..1.0, 0.0f32..0.5), 1 => Just((1.0, 1.0, 0.0))],
                 proptest::collection::vec(0..n, 0..3),
                 proptest::collection::vec(0..n, 0..2),
-                proptest::collection::vec(0u32..10_000, 0..5),
+                proptest::collection::vec(0u32..10_000, 0..40),
                 proptest::collection::vec((0..n, proptest::array::uniform3(-0.04f32..0.04), 0u8..3), 1..5),
             )
         })

@@ -239,16 +239,17 @@ impl Body {
         ws: &mut Workspace,
         source: usize,
         goal: [f32; 3],
+        wide: Wide,
     ) -> bool {
         // Constant widths let the row loop unroll: 4 on sheets, 6 in volumes.
         match self.width {
-            4 => self.chain_reaction_rows::<MASK>(ws, source, goal, 4, &mut [0; 4], &mut [0; 4]),
-            6 => self.chain_reaction_rows::<MASK>(ws, source, goal, 6, &mut [0; 6], &mut [0; 6]),
+            4 => self.chain_reaction_rows::<MASK>(ws, source, goal, 4, &mut [0; 4], &mut [0; 4], wide),
+            6 => self.chain_reaction_rows::<MASK>(ws, source, goal, 6, &mut [0; 6], &mut [0; 6], wide),
             w => {
                 let mut ends = std::mem::take(&mut ws.list_ends);
                 ends.resize(2 * w, 0);
                 let (heads, tails) = ends.split_at_mut(w);
-                let done = self.chain_reaction_rows::<MASK>(ws, source, goal, w, heads, tails);
+                let done = self.chain_reaction_rows::<MASK>(ws, source, goal, w, heads, tails, wide);
                 ws.list_ends = ends;
                 done
             }
@@ -256,6 +257,7 @@ impl Body {
     }
 
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn chain_reaction_rows<const MASK: u8>(
         &mut self,
         ws: &mut Workspace,
@@ -264,6 +266,7 @@ impl Body {
         width: usize,
         heads: &mut [usize],
         tails: &mut [usize],
+        wide: Wide,
     ) -> bool {
         ws.next_generation();
         let g = ws.generation;
@@ -299,7 +302,7 @@ impl Body {
             tail[t] = 1;
         }
 
-        let mut pattern = Pattern::default();
+        let mut patterns = Patterns::default();
         let mut blocked = false;
         'reaction: loop {
             let mut progressed = false;
@@ -323,7 +326,8 @@ impl Body {
                             moved,
                             lists,
                             tail,
-                            &mut pattern,
+                            &mut patterns,
+                            wide,
                         );
                         if done > 0 {
                             head[t] += done;
@@ -402,7 +406,11 @@ impl<const MASK: u8> pulp::WithSimd for Reaction<'_, MASK> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> bool {
-        self.body.chain_reaction_in::<MASK>(self.ws, self.source, self.goal)
+        #[cfg(target_arch = "x86_64")]
+        let wide = pulp::x86::V4::try_new();
+        #[cfg(not(target_arch = "x86_64"))]
+        let wide = None;
+        self.body.chain_reaction_in::<MASK>(self.ws, self.source, self.goal, wide)
     }
 }
 
@@ -445,7 +453,7 @@ impl Slices<'_> {
 }
 
 /// Longest run moved at once.
-const RUN: usize = 64;
+const RUN: usize = 1024;
 
 /// Elements a run checks and writes at once, without branches (a multiple of the vector widths).
 const CHUNK: usize = 16;
@@ -454,27 +462,58 @@ const CHUNK: usize = 16;
 /// pass leaves alone get infinite bounds, so the clamp leaves them alone too.
 struct Pattern {
     class: u32,
+    /// The slot, and for a chunk's adjacency rows (`CHUNK` rows of the body's width) a bit for each
+    /// entry of that slot.
+    t: usize,
+    lanes: u128,
     lo: [f32; 3 * CHUNK],
     hi: [f32; 3 * CHUNK],
 }
 
 impl Default for Pattern {
     fn default() -> Self {
-        Self { class: u32::MAX, lo: [0.0; 3 * CHUNK], hi: [0.0; 3 * CHUNK] }
+        Self { class: u32::MAX, t: usize::MAX, lanes: 0, lo: [0.0; 3 * CHUNK], hi: [0.0; 3 * CHUNK] }
     }
 }
 
 impl Pattern {
-    fn of<const MASK: u8>(class: u32, c: &super::body::SlotClass) -> Self {
+    fn of<const MASK: u8>(class: u32, c: &super::body::SlotClass, t: usize, width: usize) -> Self {
         let [lo, hi] = c.bounds;
-        let mut p = Self { class, ..Self::default() };
-        for j in 0..3 * CHUNK {
-            let k = j % 3;
-            let on = MASK & (1 << k) != 0;
-            p.lo[j] = if on { lo[k] } else { f32::NEG_INFINITY };
-            p.hi[j] = if on { hi[k] } else { f32::INFINITY };
+        let mut lanes = 0u128;
+        for k in 0..CHUNK {
+            if let Some(bit) = 1u128.checked_shl((t + width * k) as u32) {
+                lanes |= bit;
+            }
         }
-        p
+        let lane = |j: usize, x: [f32; 3], off: f32| if MASK & (1 << (j % 3)) != 0 { x[j % 3] } else { off };
+        let lo = std::array::from_fn(|j| lane(j, lo, f32::NEG_INFINITY));
+        let hi = std::array::from_fn(|j| lane(j, hi, f32::INFINITY));
+        Self { class, t, lanes, lo, hi }
+    }
+}
+
+/// The last few patterns built: the classes of a grid's rows repeat (their rest lengths differ only
+/// in the rounding of the coordinates), so most runs find theirs here.
+#[derive(Default)]
+struct Patterns {
+    cache: [Pattern; 4],
+    /// The entry the next miss replaces.
+    next: usize,
+}
+
+impl Patterns {
+    #[inline(always)]
+    fn get<const MASK: u8>(&mut self, class: u32, t: usize, b: Slices<'_>) -> &Pattern {
+        let i = match self.cache.iter().position(|x| x.class == class && x.t == t) {
+            Some(i) => i,
+            None => {
+                let i = self.next;
+                self.next = (i + 1) % self.cache.len();
+                self.cache[i] = Pattern::of::<MASK>(class, &b.classes[class as usize], t, b.width);
+                i
+            }
+        };
+        &self.cache[i]
     }
 }
 
@@ -542,6 +581,149 @@ fn check_chunk<const MASK: u8>(
     (bad.trailing_zeros() as usize).min(first_bad_byte).min(still.trailing_zeros() as usize / 3).min(CHUNK)
 }
 
+/// The AVX-512 registers, when the machine has them.
+#[cfg(target_arch = "x86_64")]
+type Wide = Option<pulp::x86::V4>;
+#[cfg(target_arch = "x86_64")]
+use wide::chunk as wide_chunk;
+
+/// Elsewhere none: the chunks take the portable path.
+#[cfg(not(target_arch = "x86_64"))]
+type Wide = Option<std::convert::Infallible>;
+#[cfg(not(target_arch = "x86_64"))]
+#[allow(clippy::too_many_arguments)]
+fn wide_chunk(
+    v: std::convert::Infallible,
+    _: Slices<'_>,
+    _: &[u32],
+    _: (usize, usize, usize, u32),
+    _: &Pattern,
+    _: [&mut [[f32; 3]]; 2],
+    _: [&mut [u32]; 2],
+    _: &mut Vec<u32>,
+    _: &mut [f32; 3 * CHUNK],
+) -> (usize, bool) {
+    match v {}
+}
+
+/// The AVX-512 form of a chunk: checked with mask registers and, when all of it passes, written
+/// straight from the registers the check computed (no round trip through memory).
+#[cfg(target_arch = "x86_64")]
+mod wide {
+    use super::{CHUNK, FIXED, Pattern, Slices, word};
+    use pulp::Simd;
+    use pulp::x86::V4;
+    use pulp::{f32x16, u32x16};
+
+    const IOTA: u32x16 = u32x16(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+
+    /// Sixteen `u32` from the start of `x`.
+    #[inline(always)]
+    fn load(x: &[u32]) -> Option<u32x16> {
+        x.first_chunk::<CHUNK>().map(|a| pulp::cast(*a))
+    }
+
+    /// Sixteen positions from the start of `x`, as three vectors.
+    #[inline(always)]
+    fn load3(x: &[[f32; 3]]) -> Option<[f32x16; 3]> {
+        x.first_chunk::<CHUNK>().map(|a| pulp::cast(*a))
+    }
+
+    /// As [`super::check_chunk`] (same checks, same clamps, bit for bit); when the whole chunk passes
+    /// it is also written: old positions, new positions, stamps, sponsors and the moved list. Returns
+    /// how many leading elements pass and whether they were written (else their clamped positions are
+    /// in `q`).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn chunk(
+        v: V4,
+        b: Slices<'_>,
+        entries: &[u32],
+        (s, c, t, g): (usize, usize, usize, u32),
+        bounds: &Pattern,
+        [pos, old]: [&mut [[f32; 3]]; 2],
+        [stamp, sponsor]: [&mut [u32]; 2],
+        moved: &mut Vec<u32>,
+        q: &mut [f32; 3 * CHUNK],
+    ) -> (usize, bool) {
+        let w = b.width;
+        // The slot is in the pattern's lanes.
+        debug_assert_eq!(bounds.t, t);
+        let (Some(e), Some(st), Some(ps), Some(pc)) = (
+            load(entries),
+            stamp.get(c..).and_then(load),
+            pos.get(s..).and_then(load3),
+            pos.get(c..).and_then(load3),
+        ) else {
+            return (0, false);
+        };
+        let (Some(inner_s), Some(inner_c), Some(flags), Some(classes)) = (
+            b.interior.get(s..).and_then(word),
+            b.interior.get(c..).and_then(word),
+            b.flags.get(c..).and_then(word),
+            b.slot_class.get(s * w..(s + CHUNK) * w),
+        ) else {
+            return (0, false);
+        };
+        if w > 8 {
+            return (0, false);
+        }
+        const ONES: u128 = u128::MAX / 255;
+        let bad_bytes = (inner_s ^ ONES) | (inner_c ^ ONES) | (flags & (ONES * FIXED as u128));
+        let gs = v.splat_u32s(g);
+        let in_sequence = v.equal_u32s(e, v.add_u32s(v.splat_u32s(s as u32), IOTA)).0;
+        let unmoved = !v.equal_u32s(st, gs).0;
+        let bad = !(in_sequence & unmoved);
+        // The classes of `CHUNK` elements' adjacency rows, `w` vectors; only lanes `t + w k` matter.
+        let mut same_class = 0u128;
+        let class = v.splat_u32s(bounds.class);
+        for (i, part) in classes.chunks_exact(CHUNK).enumerate() {
+            if let Some(x) = load(part) {
+                same_class |= (v.equal_u32s(x, class).0 as u128) << (CHUNK * i);
+            }
+        }
+        let wrong_class = !same_class & bounds.lanes;
+        let lo: [f32x16; 3] = pulp::cast(bounds.lo);
+        let hi: [f32x16; 3] = pulp::cast(bounds.hi);
+        let mut x = pc;
+        let mut same = 0u64;
+        for i in 0..3 {
+            // As `clamp_lane`: `pc` into `[ps - hi, ps - lo]`, by comparisons.
+            let (l, h) = (v.sub_f32s(ps[i], hi[i]), v.sub_f32s(ps[i], lo[i]));
+            let y = v.select_f32x16(v.cmp_lt_f32x16(pc[i], l), l, pc[i]);
+            x[i] = v.select_f32x16(v.cmp_gt_f32x16(y, h), h, y);
+            same |= (v.cmp_eq_f32x16(x[i], pc[i]).0 as u64) << (CHUNK * i);
+        }
+        let still = same & (same >> 1) & (same >> 2) & 0o1111_1111_1111_1111;
+        let k = (bad.trailing_zeros() as usize)
+            .min(bad_bytes.trailing_zeros() as usize / 8)
+            .min(wrong_class.trailing_zeros() as usize / w)
+            .min(still.trailing_zeros() as usize / 3)
+            .min(CHUNK);
+        if k < CHUNK {
+            *q = pulp::cast(x);
+            return (k, false);
+        }
+        let (Some(o), Some(p), Some(st), Some(sp)) = (
+            old.get_mut(c..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
+            pos.get_mut(c..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
+            stamp.get_mut(c..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+            sponsor.get_mut(c..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+        ) else {
+            // Not reached (the reads above covered the same range); the caller writes it instead.
+            *q = pulp::cast(x);
+            return (CHUNK, false);
+        };
+        *o = pulp::cast(pc);
+        *p = pulp::cast(x);
+        *st = pulp::cast(gs);
+        *sp = pulp::cast(v.add_u32s(v.splat_u32s(s as u32), IOTA));
+        moved
+            .extend_from_slice(&pulp::cast::<u32x16, [u32; CHUNK]>(v.add_u32s(v.splat_u32s(c as u32), IOTA)));
+        (CHUNK, true)
+    }
+}
+
 /// Moves a run of candidates at once: list entries `s, s + 1, ...` (interior sponsors), whose
 /// candidates `s + o, s + o + 1, ...` lie in another row, are interior, free, have not moved and must
 /// move. Processed one by one they would not affect each other, so the run is checked and written a
@@ -562,7 +744,8 @@ fn batch<const MASK: u8>(
     moved: &mut Vec<u32>,
     lists: &mut [u32],
     tail: &mut [usize],
-    bounds: &mut Pattern,
+    patterns: &mut Patterns,
+    wide: Wide,
 ) -> usize {
     let &Run { list, head, tail: end, t, o, g } = run;
     let width = b.width;
@@ -579,14 +762,21 @@ fn batch<const MASK: u8>(
     let Some(&cls) = b.slot_class.get(s0 * width + t) else {
         return 0;
     };
-    if bounds.class != cls {
-        *bounds = Pattern::of::<MASK>(cls, &b.classes[cls as usize]);
-    }
+    let bounds = patterns.get::<MASK>(cls, t, b);
     let mut m = 0;
     let mut q = [0.0f32; 3 * CHUNK];
     while m < RUN {
         let (s, c) = (s0 + m, c0.wrapping_add(m));
-        let k = if head + m + CHUNK <= end {
+        let mut written = false;
+        let k = if head + m + CHUNK > end {
+            0
+        } else if let Some(v) = wide {
+            let entries = &lists[list + head + m..list + end];
+            let k;
+            (k, written) =
+                wide_chunk(v, b, entries, (s, c, t, g), bounds, [pos, old], [stamp, sponsor], moved, &mut q);
+            k
+        } else {
             check_chunk::<MASK>(
                 b,
                 &lists[list + head + m..list + end],
@@ -596,8 +786,6 @@ fn batch<const MASK: u8>(
                 bounds,
                 &mut q,
             )
-        } else {
-            0
         };
         let k = if k > 0 {
             k
@@ -629,7 +817,8 @@ fn batch<const MASK: u8>(
             return 0;
         }
         let cs = c..c + k;
-        if k == CHUNK {
+        if written {
+        } else if k == CHUNK {
             // Fixed lengths, so the copies are vector moves rather than calls.
             let (Some(old), Some(now), Some(st), Some(sp)) = (
                 old.get_mut(c..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
