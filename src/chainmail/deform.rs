@@ -287,7 +287,8 @@ impl Body {
             Some(st) if st.interior.len() == n => (&st.offs, &st.interior[..n]),
             _ => (&[], &[]),
         };
-        let b = Slices { nbrs, classes, slot_class, flags, interior, offs, width };
+        let (class_change, class_words) = (&self.class_change[..], self.class_words);
+        let b = Slices { nbrs, classes, slot_class, class_change, class_words, flags, interior, offs, width };
         let (head, tail) = (&mut heads[..width], &mut tails[..width]);
         head.fill(0);
         let lists_used = width;
@@ -433,6 +434,9 @@ struct Slices<'a> {
     nbrs: &'a [u32],
     classes: &'a [super::body::SlotClass],
     slot_class: &'a [u32],
+    /// The body's class change bits (`Body::class_change`) and words per slot.
+    class_change: &'a [u64],
+    class_words: usize,
     flags: &'a [u8],
     interior: &'a [u8],
     offs: &'a [isize],
@@ -462,33 +466,23 @@ const CHUNK: usize = 16;
 /// pass leaves alone get infinite bounds, so the clamp leaves them alone too.
 struct Pattern {
     class: u32,
-    /// The slot, and for a chunk's adjacency rows (`CHUNK` rows of the body's width) a bit for each
-    /// entry of that slot.
-    t: usize,
-    lanes: u128,
     lo: [f32; 3 * CHUNK],
     hi: [f32; 3 * CHUNK],
 }
 
 impl Default for Pattern {
     fn default() -> Self {
-        Self { class: u32::MAX, t: usize::MAX, lanes: 0, lo: [0.0; 3 * CHUNK], hi: [0.0; 3 * CHUNK] }
+        Self { class: u32::MAX, lo: [0.0; 3 * CHUNK], hi: [0.0; 3 * CHUNK] }
     }
 }
 
 impl Pattern {
-    fn of<const MASK: u8>(class: u32, c: &super::body::SlotClass, t: usize, width: usize) -> Self {
+    fn of<const MASK: u8>(class: u32, c: &super::body::SlotClass) -> Self {
         let [lo, hi] = c.bounds;
-        let mut lanes = 0u128;
-        for k in 0..CHUNK {
-            if let Some(bit) = 1u128.checked_shl((t + width * k) as u32) {
-                lanes |= bit;
-            }
-        }
         let lane = |j: usize, x: [f32; 3], off: f32| if MASK & (1 << (j % 3)) != 0 { x[j % 3] } else { off };
         let lo = std::array::from_fn(|j| lane(j, lo, f32::NEG_INFINITY));
         let hi = std::array::from_fn(|j| lane(j, hi, f32::INFINITY));
-        Self { class, t, lanes, lo, hi }
+        Self { class, lo, hi }
     }
 }
 
@@ -503,18 +497,28 @@ struct Patterns {
 
 impl Patterns {
     #[inline(always)]
-    fn get<const MASK: u8>(&mut self, class: u32, t: usize, b: Slices<'_>) -> &Pattern {
-        let i = match self.cache.iter().position(|x| x.class == class && x.t == t) {
+    fn get<const MASK: u8>(&mut self, class: u32, b: Slices<'_>) -> &Pattern {
+        let i = match self.cache.iter().position(|x| x.class == class) {
             Some(i) => i,
             None => {
                 let i = self.next;
                 self.next = (i + 1) % self.cache.len();
-                self.cache[i] = Pattern::of::<MASK>(class, &b.classes[class as usize], t, b.width);
+                self.cache[i] = Pattern::of::<MASK>(class, &b.classes[class as usize]);
                 i
             }
         };
         &self.cache[i]
     }
+}
+
+/// The class change bits of elements `s..s + CHUNK` in slot `t`: bit `j` is set where element `s + j`
+/// has another class there than element `s + j - 1`.
+#[inline(always)]
+fn class_breaks(b: Slices<'_>, t: usize, s: usize) -> Option<u16> {
+    // The spare word at the end of each slot's bits keeps `base + 1` within the slot.
+    let base = t * b.class_words + s / 64;
+    let (lo, hi) = (*b.class_change.get(base)?, *b.class_change.get(base + 1)?);
+    Some(((u128::from(hi) << 64 | u128::from(lo)) >> (s % 64)) as u16)
 }
 
 /// Sixteen bytes as one word, for checking byte flags sixteen at a time.
@@ -539,12 +543,12 @@ fn check_chunk<const MASK: u8>(
     pos: &[[f32; 3]],
     bounds: &Pattern,
     q: &mut [f32; 3 * CHUNK],
+    after: usize,
 ) -> usize {
-    let w = b.width;
-    let (Some(entries), Some(stamps), Some(classes), Some(ps), Some(pc)) = (
+    let (Some(entries), Some(stamps), Some(breaks), Some(ps), Some(pc)) = (
         entries.first_chunk::<CHUNK>(),
         stamp.get(c..).and_then(<[u32]>::first_chunk::<CHUNK>),
-        b.slot_class.get(s * w..(s + CHUNK) * w),
+        class_breaks(b, t, s),
         pos.get(s..).and_then(<[[f32; 3]]>::first_chunk::<CHUNK>),
         pos.get(c..).and_then(<[[f32; 3]]>::first_chunk::<CHUNK>),
     ) else {
@@ -560,9 +564,10 @@ fn check_chunk<const MASK: u8>(
     // Bytes: interior flags are 0 or 1, so `x ^ ONES` is non-zero exactly where one is 0.
     const ONES: u128 = u128::MAX / 255;
     let bad_bytes = (inner_s ^ ONES) | (inner_c ^ ONES) | (flags & (ONES * FIXED as u128));
-    let mut bad = 0u32;
+    // The run's first element has the run's class by definition; the others must not change it.
+    let mut bad = u32::from(breaks) & !u32::from(after == 0);
     for k in 0..CHUNK {
-        let fail = (entries[k] != (s + k) as u32) | (stamps[k] == g) | (classes[k * w + t] != bounds.class);
+        let fail = (entries[k] != (s + k) as u32) | (stamps[k] == g);
         bad |= (fail as u32) << k;
     }
     let (ps, pc) = (ps.as_flattened(), pc.as_flattened());
@@ -602,6 +607,7 @@ fn wide_chunk(
     _: [&mut [u32]; 2],
     _: &mut Vec<u32>,
     _: &mut [f32; 3 * CHUNK],
+    _: usize,
 ) -> (usize, bool) {
     match v {}
 }
@@ -645,10 +651,8 @@ mod wide {
         [stamp, sponsor]: [&mut [u32]; 2],
         moved: &mut Vec<u32>,
         q: &mut [f32; 3 * CHUNK],
+        after: usize,
     ) -> (usize, bool) {
-        let w = b.width;
-        // The slot is in the pattern's lanes.
-        debug_assert_eq!(bounds.t, t);
         let (Some(e), Some(st), Some(ps), Some(pc)) = (
             load(entries),
             stamp.get(c..).and_then(load),
@@ -657,32 +661,21 @@ mod wide {
         ) else {
             return (0, false);
         };
-        let (Some(inner_s), Some(inner_c), Some(flags), Some(classes)) = (
+        let (Some(inner_s), Some(inner_c), Some(flags), Some(breaks)) = (
             b.interior.get(s..).and_then(word),
             b.interior.get(c..).and_then(word),
             b.flags.get(c..).and_then(word),
-            b.slot_class.get(s * w..(s + CHUNK) * w),
+            super::class_breaks(b, t, s),
         ) else {
             return (0, false);
         };
-        if w > 8 {
-            return (0, false);
-        }
         const ONES: u128 = u128::MAX / 255;
         let bad_bytes = (inner_s ^ ONES) | (inner_c ^ ONES) | (flags & (ONES * FIXED as u128));
         let gs = v.splat_u32s(g);
         let in_sequence = v.equal_u32s(e, v.add_u32s(v.splat_u32s(s as u32), IOTA)).0;
         let unmoved = !v.equal_u32s(st, gs).0;
-        let bad = !(in_sequence & unmoved);
-        // The classes of `CHUNK` elements' adjacency rows, `w` vectors; only lanes `t + w k` matter.
-        let mut same_class = 0u128;
-        let class = v.splat_u32s(bounds.class);
-        for (i, part) in classes.chunks_exact(CHUNK).enumerate() {
-            if let Some(x) = load(part) {
-                same_class |= (v.equal_u32s(x, class).0 as u128) << (CHUNK * i);
-            }
-        }
-        let wrong_class = !same_class & bounds.lanes;
+        // The run's first element has the run's class by definition; the others must not change it.
+        let bad = !(in_sequence & unmoved) | breaks & !u16::from(after == 0);
         let lo: [f32x16; 3] = pulp::cast(bounds.lo);
         let hi: [f32x16; 3] = pulp::cast(bounds.hi);
         let mut x = pc;
@@ -697,10 +690,10 @@ mod wide {
         let still = same & (same >> 1) & (same >> 2) & 0o1111_1111_1111_1111;
         let k = (bad.trailing_zeros() as usize)
             .min(bad_bytes.trailing_zeros() as usize / 8)
-            .min(wrong_class.trailing_zeros() as usize / w)
             .min(still.trailing_zeros() as usize / 3)
             .min(CHUNK);
-        if k < CHUNK {
+        // Fewer than two moves in all are left to the one-by-one path.
+        if k == 0 || k + after < 2 {
             *q = pulp::cast(x);
             return (k, false);
         }
@@ -712,15 +705,63 @@ mod wide {
         ) else {
             // Not reached (the reads above covered the same range); the caller writes it instead.
             *q = pulp::cast(x);
-            return (CHUNK, false);
+            return (k, false);
         };
-        *o = pulp::cast(pc);
-        *p = pulp::cast(x);
-        *st = pulp::cast(gs);
-        *sp = pulp::cast(v.add_u32s(v.splat_u32s(s as u32), IOTA));
-        moved
-            .extend_from_slice(&pulp::cast::<u32x16, [u32; CHUNK]>(v.add_u32s(v.splat_u32s(c as u32), IOTA)));
-        (CHUNK, true)
+        let sponsors = v.add_u32s(v.splat_u32s(s as u32), IOTA);
+        let candidates = pulp::cast::<u32x16, [u32; CHUNK]>(v.add_u32s(v.splat_u32s(c as u32), IOTA));
+        if k == CHUNK {
+            *o = pulp::cast(pc);
+            *p = pulp::cast(x);
+            *st = pulp::cast(gs);
+            *sp = pulp::cast(sponsors);
+            moved.extend_from_slice(&candidates);
+        } else {
+            // The first `k` lanes take the moves; the others are written back as they were (they
+            // are other elements than the moved ones, and nothing else writes them meanwhile).
+            let lanes = pulp::b16(((1u32 << k) - 1) as u16);
+            let coords = (1u64 << (3 * k)) - 1;
+            let was: [f32x16; 3] = pulp::cast(*o);
+            let mut new_old = was;
+            for i in 0..3 {
+                let m = pulp::b16((coords >> (CHUNK * i)) as u16);
+                x[i] = v.select_f32x16(m, x[i], pc[i]);
+                new_old[i] = v.select_f32x16(m, pc[i], was[i]);
+            }
+            let (st_was, sp_was): (u32x16, u32x16) = (pulp::cast(*st), pulp::cast(*sp));
+            *o = pulp::cast(new_old);
+            *p = pulp::cast(x);
+            *st = pulp::cast(v.select_u32s(lanes, gs, st_was));
+            *sp = pulp::cast(v.select_u32s(lanes, sponsors, sp_was));
+            moved.extend_from_slice(&candidates[..k]);
+        }
+        (k, true)
+    }
+
+    /// Pushes candidates `c..c + k` to a candidate list (`list`, ending at `end`) where their
+    /// neighbours `d..d + k` have not moved: sixteen at once when none has.
+    #[inline(always)]
+    pub(super) fn push(
+        v: V4,
+        stamp: &[u32],
+        [c, d, k]: [usize; 3],
+        g: u32,
+        list: &mut [u32],
+        end: &mut usize,
+    ) {
+        let lanes = ((1u32 << k) - 1) as u16;
+        if let (Some(ds), Some(slots)) =
+            (stamp.get(d..).and_then(load), list.get_mut(*end..).and_then(<[u32]>::first_chunk_mut::<CHUNK>))
+            && v.equal_u32s(ds, v.splat_u32s(g)).0 & lanes == 0
+        {
+            // Entries past `k` land beyond the list's end, where nothing reads them.
+            *slots = pulp::cast(v.add_u32s(v.splat_u32s(c as u32), IOTA));
+            *end += k;
+            return;
+        }
+        for (j, &x) in stamp[d..d + k].iter().enumerate() {
+            list[*end] = (c + j) as u32;
+            *end += (x != g) as usize;
+        }
     }
 }
 
@@ -762,7 +803,7 @@ fn batch<const MASK: u8>(
     let Some(&cls) = b.slot_class.get(s0 * width + t) else {
         return 0;
     };
-    let bounds = patterns.get::<MASK>(cls, t, b);
+    let bounds = patterns.get::<MASK>(cls, b);
     let mut m = 0;
     let mut q = [0.0f32; 3 * CHUNK];
     while m < RUN {
@@ -773,8 +814,18 @@ fn batch<const MASK: u8>(
         } else if let Some(v) = wide {
             let entries = &lists[list + head + m..list + end];
             let k;
-            (k, written) =
-                wide_chunk(v, b, entries, (s, c, t, g), bounds, [pos, old], [stamp, sponsor], moved, &mut q);
+            (k, written) = wide_chunk(
+                v,
+                b,
+                entries,
+                (s, c, t, g),
+                bounds,
+                [pos, old],
+                [stamp, sponsor],
+                moved,
+                &mut q,
+                m,
+            );
             k
         } else {
             check_chunk::<MASK>(
@@ -785,6 +836,7 @@ fn batch<const MASK: u8>(
                 pos,
                 bounds,
                 &mut q,
+                m,
             )
         };
         let k = if k > 0 {
@@ -854,6 +906,12 @@ fn batch<const MASK: u8>(
             let list = &mut lists[u * n..(u + 1) * n];
             // In range: the candidates are interior.
             let d = c.wrapping_add_signed(ou);
+            #[cfg(target_arch = "x86_64")]
+            if let Some(v) = wide {
+                wide::push(v, stamp, [c, d, k], g, list, &mut end);
+                *tail = end;
+                continue;
+            }
             let ds = &stamp[d..d + k];
             if ds.iter().fold(true, |a, &x| a & (x != g)) && end + k <= n {
                 for (j, e) in list[end..end + k].iter_mut().enumerate() {
