@@ -796,9 +796,19 @@ fn batch<const MASK: u8>(
         return 0;
     }
     let c0 = s0.wrapping_add_signed(o);
-    // The first candidate has moved already: the entry is done with, as one by one.
+    // The first candidate has moved already, and maybe those of the entries after it: such entries
+    // are done with, as one by one.
     if stamp.get(c0) == Some(&g) {
-        return 1;
+        let mut k = 1;
+        while k < RUN
+            && head + k < end
+            && lists[list + head + k] as usize == s0 + k
+            && b.interior.get(s0 + k) == Some(&1)
+            && stamp.get(c0.wrapping_add(k)) == Some(&g)
+        {
+            k += 1;
+        }
+        return k;
     }
     let Some(&cls) = b.slot_class.get(s0 * width + t) else {
         return 0;
