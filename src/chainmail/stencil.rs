@@ -486,6 +486,41 @@ const PARALLEL_MIN: usize = 1 << 15;
 /// Fewest slabs a band has.
 const BAND_MIN: usize = 4;
 
+/// How long the calling thread waits for the pool's band by spinning before it blocks.
+const SPIN: std::time::Duration = std::time::Duration::from_millis(2);
+
+/// Runs `here` on the calling thread and `there` on the thread pool, and returns both results.
+///
+/// `rayon::join` called from outside the pool hands both halves to the pool and puts the caller to
+/// sleep until they are done: on this project's virtual machines waking the sleeping threads costs
+/// tens of microseconds, as much as a quarter of a whole-body sweep. Here only one pool thread is
+/// woken, and the caller, once done with its own half, spins briefly rather than sleeping (and
+/// then blocks as usual, which also lets a pool thread calling this run the other half itself).
+fn here_and_there<A, B>(here: A, there: B) -> (f32, f32)
+where
+    A: FnOnce() -> f32,
+    B: FnOnce() -> f32 + Send,
+{
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let done = AtomicBool::new(false);
+    let mut far = 0.0;
+    let near = rayon::in_place_scope(|s| {
+        s.spawn(|_| {
+            far = there();
+            done.store(true, Ordering::Release);
+        });
+        let near = here();
+        let start = std::time::Instant::now();
+        while !done.load(Ordering::Acquire) && start.elapsed() < SPIN {
+            for _ in 0..64 {
+                std::hint::spin_loop();
+            }
+        }
+        near
+    });
+    (near, far)
+}
+
 /// Scratch slabs a sweep split `depth` times needs: two per band, two halos per split.
 fn scratch_slabs(depth: u32) -> usize {
     (0..depth).fold(2, |s, _| 2 * s + 2)
@@ -510,11 +545,10 @@ impl Body {
         }
         let slabs = n / slab;
         let threads = if n >= PARALLEL_MIN { rayon::current_num_threads() } else { 1 };
-        // Two bands per thread, so that a thread slowed by the rest of the machine leaves more to the
-        // other; one thread sweeps alone.
+        // One band per thread (the calling thread sweeps one of them); one thread sweeps alone.
         let mut depth = 0;
         while threads > 1
-            && (1 << (depth + 1)) <= 2 * threads
+            && (1 << (depth + 1)) <= threads
             && slabs >> (depth + 1) >= BAND_MIN
             && scratch_slabs(depth + 1) * slab <= scratch.len()
         {
@@ -526,8 +560,8 @@ impl Body {
         }
         let mut pos = std::mem::take(&mut self.pos);
         let change = match stencil.offs.len() {
-            4 => Some(self.sweep_range::<4>(&stencil, 0, &mut pos, None, None, scratch, depth)),
-            6 => Some(self.sweep_range::<6>(&stencil, 0, &mut pos, None, None, scratch, depth)),
+            4 => Some(self.sweep_range::<4>(&stencil, 0, &mut pos, None, None, scratch, depth, true)),
+            6 => Some(self.sweep_range::<6>(&stencil, 0, &mut pos, None, None, scratch, depth, true)),
             _ => None,
         };
         self.pos = pos;
@@ -547,6 +581,7 @@ impl Body {
         next: Option<&[[f32; 3]]>,
         scratch: &mut [[f32; 3]],
         depth: u32,
+        top: bool,
     ) -> f32 {
         let slab = st.slab;
         let half = region.len() / slab / 2;
@@ -569,20 +604,23 @@ impl Body {
         right_first.copy_from_slice(&region[half * slab..(half + 1) * slab]);
         let (left, right) = region.split_at_mut(half * slab);
         let (left_scratch, right_scratch) = rest.split_at_mut(rest.len() / 2);
-        let (a, b) = rayon::join(
-            || self.sweep_range::<W>(st, first, left, prev, Some(right_first), left_scratch, depth - 1),
-            || {
-                self.sweep_range::<W>(
-                    st,
-                    first + half,
-                    right,
-                    Some(left_last),
-                    next,
-                    right_scratch,
-                    depth - 1,
-                )
-            },
-        );
+        let left = || {
+            self.sweep_range::<W>(st, first, left, prev, Some(right_first), left_scratch, depth - 1, false)
+        };
+        let right = || {
+            self.sweep_range::<W>(
+                st,
+                first + half,
+                right,
+                Some(left_last),
+                next,
+                right_scratch,
+                depth - 1,
+                false,
+            )
+        };
+        // Inside the pool a plain `join`; from outside it, the calling thread takes a band itself.
+        let (a, b) = if top { here_and_there(right, left) } else { rayon::join(left, right) };
         a.max(b)
     }
 
