@@ -16,10 +16,22 @@ impl Lcg {
 }
 
 fn propagate(c: &mut Criterion, name: &str, lattice: Lattice, material: Material, step: f32) {
+    let n = lattice.element_count();
+    propagate_from(c, name, lattice, material, step, n / 2);
+}
+
+/// The chain reaction with element `source` moved back and forth.
+fn propagate_from(
+    c: &mut Criterion,
+    name: &str,
+    lattice: Lattice,
+    material: Material,
+    step: f32,
+    source: usize,
+) {
     let mut body = Body::new(lattice, material).expect("body");
     let mut ws = Workspace::new(&body);
-    let n = body.element_count();
-    let src = ElementId((n / 2) as u32);
+    let src = ElementId(source as u32);
     // One dry run tells how many elements a move of this size carries.
     let p = body.position(src).expect("source");
     let moved = body.deform(&mut ws, src, [p[0] + step, p[1] + step, p[2]], Pass::All).expect("deform").moved;
@@ -43,6 +55,16 @@ fn propagate(c: &mut Criterion, name: &str, lattice: Lattice, material: Material
 fn benches(c: &mut Criterion) {
     let h = 0.001;
     propagate(c, "sheet_512_rigid", Lattice::sheet(512, 512, h).expect("sheet"), Material::rigid(), 2.0 * h);
+    // The same with the grasp in the middle of the middle row (the source above is its first element):
+    // half of each row then moves down the row, half up.
+    propagate_from(
+        c,
+        "sheet_512_rigid_centre",
+        Lattice::sheet(512, 512, h).expect("sheet"),
+        Material::rigid(),
+        2.0 * h,
+        256 * 512 + 256,
+    );
     propagate(
         c,
         "sheet_1024_soft",

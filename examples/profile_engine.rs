@@ -1,7 +1,8 @@
 //! Runs the engine's two hot loops on a 512 x 512 sheet (the benches' bodies) and prints their speed,
 //! for profiling:
 //! `perf record target/release/examples/profile_engine 200 [SIDE [chain|sweep]]`, or with one repetition under
-//! `valgrind --tool=callgrind` for instruction counts.
+//! `valgrind --tool=callgrind` for instruction counts. `SRC=i` moves element `i` rather than the
+//! bench's source (`SIDE² / 2`, the first element of the middle row).
 use dissect::chainmail::{Body, ElementId, Lattice, Material, Pass, RelaxBudget, RelaxRegion, Workspace};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -12,7 +13,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let run = |name: &str| only.as_deref().is_none_or(|o| o == name);
     let mut body = Body::new(Lattice::sheet(n, n, 0.001)?, Material::rigid())?;
     let mut ws = Workspace::new(&body);
-    let src = ElementId((n * n / 2) as u32);
+    let src = ElementId(std::env::var("SRC").ok().and_then(|s| s.parse().ok()).unwrap_or(n * n / 2) as u32);
     let t = std::time::Instant::now();
     let mut moved = 0;
     for k in 0..if run("chain") { reps } else { 0 } {

@@ -737,6 +737,186 @@ mod wide {
         (k, true)
     }
 
+    /// [`chunk`] for a run down the row: sponsors `s, s - 1, ..., s - 15` (list entries in that
+    /// order) and candidates `c, c - 1, ...`. The body's arrays are loaded in memory order (lane `i`
+    /// holds element `s - 15 + i`), so the run's first failure is the highest failing lane. Returns
+    /// how many moves were written: none when the chunk's first fails, or when fewer than two would
+    /// be in the run so far (left to the one-by-one path).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn chunk_down(
+        v: V4,
+        b: Slices<'_>,
+        entries: &[u32],
+        (s, c, t, g): (usize, usize, usize, u32),
+        bounds: &Pattern,
+        [pos, old]: [&mut [[f32; 3]]; 2],
+        [stamp, sponsor]: [&mut [u32]; 2],
+        moved: &mut Vec<u32>,
+        after: usize,
+    ) -> usize {
+        let (Some(ls), Some(lc)) = (s.checked_sub(CHUNK - 1), c.checked_sub(CHUNK - 1)) else {
+            return 0;
+        };
+        let (Some(e), Some(st), Some(ps), Some(pc)) = (
+            load(entries),
+            stamp.get(lc..).and_then(load),
+            pos.get(ls..).and_then(load3),
+            pos.get(lc..).and_then(load3),
+        ) else {
+            return 0;
+        };
+        // Change bits of elements `ls + 1 ..= s + 1`: element `ls + i` keeps the run's class while
+        // every bit `j >= i` is clear (bit 15, the element above the chunk, matters only after it).
+        let (Some(inner_s), Some(inner_c), Some(flags), Some(breaks)) = (
+            b.interior.get(ls..).and_then(word),
+            b.interior.get(lc..).and_then(word),
+            b.flags.get(lc..).and_then(word),
+            super::class_breaks(b, t, ls + 1),
+        ) else {
+            return 0;
+        };
+        const ONES: u128 = u128::MAX / 255;
+        let bad_bytes = (inner_s ^ ONES) | (inner_c ^ ONES) | (flags & (ONES * FIXED as u128));
+        let gs = v.splat_u32s(g);
+        // Entries in list order: lane `k` is sponsor `s - k`.
+        let in_sequence = v.equal_u32s(e, v.sub_u32s(v.splat_u32s(s as u32), IOTA)).0;
+        let moved_now = v.equal_u32s(st, gs).0;
+        let breaks = breaks & if after == 0 { 0x7fff } else { 0xffff };
+        let lo: [f32x16; 3] = pulp::cast(bounds.lo);
+        let hi: [f32x16; 3] = pulp::cast(bounds.hi);
+        let mut x = pc;
+        let mut same = 0u64;
+        for i in 0..3 {
+            let (l, h) = (v.sub_f32s(ps[i], hi[i]), v.sub_f32s(ps[i], lo[i]));
+            let y = v.select_f32x16(v.cmp_lt_f32x16(pc[i], l), l, pc[i]);
+            x[i] = v.select_f32x16(v.cmp_gt_f32x16(y, h), h, y);
+            same |= (v.cmp_eq_f32x16(x[i], pc[i]).0 as u64) << (CHUNK * i);
+        }
+        let still = same & (same >> 1) & (same >> 2) & 0o1111_1111_1111_1111;
+        // The highest failing lane, by memory order (16 when none fails).
+        let top =
+            |bits: u128, per: u32| if bits == 0 { None } else { Some((127 - bits.leading_zeros()) / per) };
+        let failing = [
+            top(u128::from(moved_now), 1),
+            top(bad_bytes, 8),
+            top(u128::from(breaks), 1),
+            top(u128::from(still), 3),
+        ];
+        let highest = failing.iter().flatten().max().map_or(0, |&i| i as usize + 1);
+        let k = (CHUNK - highest).min((!in_sequence).trailing_zeros() as usize);
+        // Fewer than two moves in all are left to the one-by-one path.
+        if k == 0 || k + after < 2 {
+            return 0;
+        }
+        let (Some(o), Some(p), Some(stw), Some(sp)) = (
+            old.get_mut(lc..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
+            pos.get_mut(lc..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
+            stamp.get_mut(lc..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+            sponsor.get_mut(lc..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+        ) else {
+            return 0;
+        };
+        // The top `k` lanes take the moves; the others are written back as they were.
+        let lanes = pulp::b16((((1u32 << k) - 1) << (CHUNK - k)) as u16);
+        let coords = ((1u64 << (3 * k)) - 1) << (3 * (CHUNK - k));
+        let was: [f32x16; 3] = pulp::cast(*o);
+        let mut new_old = was;
+        for i in 0..3 {
+            let m = pulp::b16((coords >> (CHUNK * i)) as u16);
+            x[i] = v.select_f32x16(m, x[i], pc[i]);
+            new_old[i] = v.select_f32x16(m, pc[i], was[i]);
+        }
+        let (st_was, sp_was): (u32x16, u32x16) = (pulp::cast(*stw), pulp::cast(*sp));
+        *o = pulp::cast(new_old);
+        *p = pulp::cast(x);
+        *stw = pulp::cast(v.select_u32s(lanes, gs, st_was));
+        *sp = pulp::cast(v.select_u32s(lanes, v.add_u32s(v.splat_u32s(ls as u32), IOTA), sp_was));
+        // Moved in the run's order: `c, c - 1, ...`.
+        let order = pulp::cast::<u32x16, [u32; CHUNK]>(v.sub_u32s(v.splat_u32s(c as u32), IOTA));
+        moved.extend_from_slice(&order[..k]);
+        k
+    }
+
+    /// [`super::batch`] for a run down the row (entries `s0, s0 - 1, ...`), a chunk at a time, as
+    /// the one-by-one path would: the same moves in the same order, the same sponsors, and the same
+    /// list entries but for those whose neighbour has moved by the time they would be read.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn batch_down(
+        v: V4,
+        run: &super::Run,
+        b: Slices<'_>,
+        [pos, old]: [&mut [[f32; 3]]; 2],
+        [stamp, sponsor]: [&mut [u32]; 2],
+        moved: &mut Vec<u32>,
+        lists: &mut [u32],
+        tail: &mut [usize],
+        bounds: &Pattern,
+    ) -> usize {
+        let &super::Run { list, head, tail: end, t, o, g } = run;
+        let n = pos.len();
+        let s0 = lists[list + head] as usize;
+        let c0 = s0.wrapping_add_signed(o);
+        let mut m = 0;
+        while m < super::RUN && head + m + CHUNK <= end && m < s0 {
+            let (s, c) = (s0 - m, c0.wrapping_sub(m));
+            let entries = &lists[list + head + m..list + end];
+            // How many were moved and written (none: the run ends here).
+            let k = chunk_down(v, b, entries, (s, c, t, g), bounds, [pos, old], [stamp, sponsor], moved, m);
+            if k == 0 {
+                break;
+            }
+            // Pushes across rows, away from the sponsors, in the run's order.
+            for (u, tail) in tail.iter_mut().enumerate().take(b.width) {
+                let ou = b.offs[u];
+                if ou == -o || ou.unsigned_abs() == 1 {
+                    continue;
+                }
+                let list = &mut lists[u * n..(u + 1) * n];
+                let d = c.wrapping_add_signed(ou);
+                let lanes = (((1u32 << k) - 1) << (CHUNK - k)) as u16;
+                let mut end = *tail;
+                if let (Some(ds), Some(slots)) = (
+                    d.checked_sub(CHUNK - 1).and_then(|lo| stamp.get(lo..)).and_then(load),
+                    list.get_mut(end..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+                ) && v.equal_u32s(ds, v.splat_u32s(g)).0 & lanes == 0
+                {
+                    *slots = pulp::cast(v.sub_u32s(v.splat_u32s(c as u32), IOTA));
+                    end += k;
+                } else {
+                    for j in 0..k {
+                        list[end] = (c - j) as u32;
+                        end += (stamp[d - j] != g) as usize;
+                    }
+                }
+                *tail = end;
+            }
+            m += k;
+            if k < CHUNK {
+                break;
+            }
+        }
+        if m == 0 {
+            return 0;
+        }
+        // Along the row only the run's two ends can have a neighbour outside it.
+        let run = c0 + 1 - m..c0 + 1;
+        for (u, tail) in tail.iter_mut().enumerate().take(b.width) {
+            let ou = b.offs[u];
+            if ou.unsigned_abs() == 1 {
+                for c in [c0, c0 + 1 - m] {
+                    let d = c.wrapping_add_signed(ou);
+                    if !run.contains(&d) && stamp.get(d) != Some(&g) {
+                        lists[u * n + *tail] = c as u32;
+                        *tail += 1;
+                    }
+                }
+            }
+        }
+        m
+    }
+
     /// Pushes candidates `c..c + k` to a candidate list (`list`, ending at `end`) where their
     /// neighbours `d..d + k` have not moved: sixteen at once when none has.
     #[inline(always)]
@@ -798,13 +978,17 @@ fn batch<const MASK: u8>(
     let c0 = s0.wrapping_add_signed(o);
     // The first candidate has moved already, and maybe those of the entries after it: such entries
     // are done with, as one by one.
+    // Runs go up or down the row: entries `s0, s0 + 1, ...` or `s0, s0 - 1, ...` (the order in which
+    // the list along the row moved them).
+    let down = head + 1 < end && lists[list + head + 1] as usize == s0.wrapping_sub(1);
+    let step = |k: usize| if down { s0.wrapping_sub(k) } else { s0 + k };
     if stamp.get(c0) == Some(&g) {
         let mut k = 1;
         while k < RUN
             && head + k < end
-            && lists[list + head + k] as usize == s0 + k
-            && b.interior.get(s0 + k) == Some(&1)
-            && stamp.get(c0.wrapping_add(k)) == Some(&g)
+            && lists[list + head + k] as usize == step(k)
+            && b.interior.get(step(k)) == Some(&1)
+            && stamp.get(step(k).wrapping_add_signed(o)) == Some(&g)
         {
             k += 1;
         }
@@ -814,6 +998,13 @@ fn batch<const MASK: u8>(
         return 0;
     };
     let bounds = patterns.get::<MASK>(cls, b);
+    if down {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v) = wide {
+            return wide::batch_down(v, run, b, [pos, old], [stamp, sponsor], moved, lists, tail, bounds);
+        }
+        return 0;
+    }
     let mut m = 0;
     let mut q = [0.0f32; 3 * CHUNK];
     while m < RUN {
