@@ -465,45 +465,52 @@ const CHUNK: usize = 16;
 /// A class's bounds laid out for [`check_chunk`]: lane `j` holds coordinate `j % 3`; coordinates the
 /// pass leaves alone get infinite bounds, so the clamp leaves them alone too.
 struct Pattern {
-    class: u32,
     lo: [f32; 3 * CHUNK],
     hi: [f32; 3 * CHUNK],
 }
 
 impl Default for Pattern {
     fn default() -> Self {
-        Self { class: u32::MAX, lo: [0.0; 3 * CHUNK], hi: [0.0; 3 * CHUNK] }
+        Self { lo: [0.0; 3 * CHUNK], hi: [0.0; 3 * CHUNK] }
     }
 }
 
 impl Pattern {
-    fn of<const MASK: u8>(class: u32, c: &super::body::SlotClass) -> Self {
+    fn of<const MASK: u8>(c: &super::body::SlotClass) -> Self {
         let [lo, hi] = c.bounds;
         let lane = |j: usize, x: [f32; 3], off: f32| if MASK & (1 << (j % 3)) != 0 { x[j % 3] } else { off };
         let lo = std::array::from_fn(|j| lane(j, lo, f32::NEG_INFINITY));
         let hi = std::array::from_fn(|j| lane(j, hi, f32::INFINITY));
-        Self { class, lo, hi }
+        Self { lo, hi }
     }
 }
 
 /// The last few patterns built: the classes of a grid's rows repeat (their rest lengths differ only
 /// in the rounding of the coordinates), so most runs find theirs here.
-#[derive(Default)]
 struct Patterns {
+    /// The cached patterns' classes, apart, so that a lookup reads one line.
+    classes: [u32; 4],
     cache: [Pattern; 4],
     /// The entry the next miss replaces.
     next: usize,
 }
 
+impl Default for Patterns {
+    fn default() -> Self {
+        Self { classes: [u32::MAX; 4], cache: Default::default(), next: 0 }
+    }
+}
+
 impl Patterns {
     #[inline(always)]
     fn get<const MASK: u8>(&mut self, class: u32, b: Slices<'_>) -> &Pattern {
-        let i = match self.cache.iter().position(|x| x.class == class) {
+        let i = match self.classes.iter().position(|&x| x == class) {
             Some(i) => i,
             None => {
                 let i = self.next;
                 self.next = (i + 1) % self.cache.len();
-                self.cache[i] = Pattern::of::<MASK>(class, &b.classes[class as usize]);
+                self.cache[i] = Pattern::of::<MASK>(&b.classes[class as usize]);
+                self.classes[i] = class;
                 i
             }
         };
@@ -528,9 +535,10 @@ fn word(bytes: &[u8]) -> Option<u128> {
 }
 
 /// How many leading elements of a chunk pass the one-by-one path's checks, for sponsors `s..s + CHUNK`
-/// (list entries `entries`) and candidates `c..c + CHUNK` through slot `t` of class `bounds.class`:
-/// entry in sequence, sponsor and candidate interior, candidate not moved and free, sponsor's link of
-/// that class, candidate pushed out of its box. The candidates' clamped positions go to `q`. Every
+/// (list entries `entries`) and candidates `c..c + CHUNK` through slot `t`, whose run has the class
+/// of `bounds` (from element `s - after`): entry in sequence, sponsor and candidate interior,
+/// candidate not moved and free, sponsor's link of the run's class (no change bit since the run's
+/// first), candidate pushed out of its box. The candidates' clamped positions go to `q`. Every
 /// check runs on every lane without a branch, so the loops vectorise; the first failure is read off
 /// the bit masks. All ranges must be in bounds (else 0).
 #[allow(clippy::too_many_arguments)]
