@@ -283,12 +283,25 @@ impl Body {
             &mut ws.lists[..n * width],
         );
         // Interior grid elements find their neighbours by offset (`Slices::neighbour`).
-        let (offs, interior): (&[isize], &[u8]) = match &self.stencil {
-            Some(st) if st.interior.len() == n => (&st.offs, &st.interior[..n]),
-            _ => (&[], &[]),
+        let (offs, interior, across): (&[isize], &[u8], &[u8]) = match &self.stencil {
+            Some(st) if st.interior.len() == n && st.across.len() == n => {
+                (&st.offs, &st.interior[..n], &st.across[..n])
+            }
+            _ => (&[], &[], &[]),
         };
         let (class_change, class_words) = (&self.class_change[..], self.class_words);
-        let b = Slices { nbrs, classes, slot_class, class_change, class_words, flags, interior, offs, width };
+        let b = Slices {
+            nbrs,
+            classes,
+            slot_class,
+            class_change,
+            class_words,
+            flags,
+            interior,
+            across,
+            offs,
+            width,
+        };
         let (head, tail) = (&mut heads[..width], &mut tails[..width]);
         head.fill(0);
         let lists_used = width;
@@ -309,9 +322,9 @@ impl Body {
             let mut progressed = false;
             for t in 0..lists_used {
                 let list = t * n;
-                // Lists across rows (y and z on grids) hold runs of consecutive interior sponsors whose
-                // candidates are consecutive too and independent of each other: such a run is moved
-                // as one (see `batch`), with the same moves, order, sponsors and list entries.
+                // Lists across rows (y and z on grids) hold runs of consecutive sponsors (up or down
+                // a row) whose candidates are consecutive too and independent of each other: such a
+                // run is moved as one (see `batch`), with the same moves, order and sponsors.
                 let across = offs.get(t).filter(|o| o.unsigned_abs() > 1).copied();
                 while head[t] < tail[t] {
                     progressed = true;
@@ -439,6 +452,8 @@ struct Slices<'a> {
     class_words: usize,
     flags: &'a [u8],
     interior: &'a [u8],
+    /// `Stencil::across`: elements whose neighbours across rows are at the grid offsets.
+    across: &'a [u8],
     offs: &'a [isize],
     width: usize,
 }
@@ -536,7 +551,8 @@ fn word(bytes: &[u8]) -> Option<u128> {
 
 /// How many leading elements of a chunk pass the one-by-one path's checks, for sponsors `s..s + CHUNK`
 /// (list entries `entries`) and candidates `c..c + CHUNK` through slot `t`, whose run has the class
-/// of `bounds` (from element `s - after`): entry in sequence, sponsor and candidate interior,
+/// of `bounds` (from element `s - after`): entry in sequence, sponsor and candidate with their
+/// neighbours across rows at the grid offsets (`Stencil::across`),
 /// candidate not moved and free, sponsor's link of the run's class (no change bit since the run's
 /// first), candidate pushed out of its box. The candidates' clamped positions go to `q`. Every
 /// check runs on every lane without a branch, so the loops vectorise; the first failure is read off
@@ -563,13 +579,13 @@ fn check_chunk<const MASK: u8>(
         return 0;
     };
     let (Some(inner_s), Some(inner_c), Some(flags)) = (
-        word(&b.interior[s.min(b.interior.len())..]),
-        word(&b.interior[c.min(b.interior.len())..]),
+        word(&b.across[s.min(b.across.len())..]),
+        word(&b.across[c.min(b.across.len())..]),
         word(&b.flags[c..]),
     ) else {
         return 0;
     };
-    // Bytes: interior flags are 0 or 1, so `x ^ ONES` is non-zero exactly where one is 0.
+    // Bytes: the flags are 0 or 1, so `x ^ ONES` is non-zero exactly where one is 0.
     const ONES: u128 = u128::MAX / 255;
     let bad_bytes = (inner_s ^ ONES) | (inner_c ^ ONES) | (flags & (ONES * FIXED as u128));
     // The run's first element has the run's class by definition; the others must not change it.
@@ -670,8 +686,8 @@ mod wide {
             return (0, false);
         };
         let (Some(inner_s), Some(inner_c), Some(flags), Some(breaks)) = (
-            b.interior.get(s..).and_then(word),
-            b.interior.get(c..).and_then(word),
+            b.across.get(s..).and_then(word),
+            b.across.get(c..).and_then(word),
             b.flags.get(c..).and_then(word),
             super::class_breaks(b, t, s),
         ) else {
@@ -777,8 +793,8 @@ mod wide {
         // Change bits of elements `ls + 1 ..= s + 1`: element `ls + i` keeps the run's class while
         // every bit `j >= i` is clear (bit 15, the element above the chunk, matters only after it).
         let (Some(inner_s), Some(inner_c), Some(flags), Some(breaks)) = (
-            b.interior.get(ls..).and_then(word),
-            b.interior.get(lc..).and_then(word),
+            b.across.get(ls..).and_then(word),
+            b.across.get(lc..).and_then(word),
             b.flags.get(lc..).and_then(word),
             super::class_breaks(b, t, ls + 1),
         ) else {
@@ -914,7 +930,8 @@ mod wide {
             let ou = b.offs[u];
             if ou.unsigned_abs() == 1 {
                 for c in [c0, c0 + 1 - m] {
-                    let d = c.wrapping_add_signed(ou);
+                    // The real neighbour: a row's end has padding there (itself, moved).
+                    let d = b.neighbour(c, u);
                     if !run.contains(&d) && stamp.get(d) != Some(&g) {
                         lists[u * n + *tail] = c as u32;
                         *tail += 1;
@@ -953,14 +970,15 @@ mod wide {
     }
 }
 
-/// Moves a run of candidates at once: list entries `s, s + 1, ...` (interior sponsors), whose
-/// candidates `s + o, s + o + 1, ...` lie in another row, are interior, free, have not moved and must
+/// Moves a run of candidates at once: list entries `s, s + 1, ...` (or `s, s - 1, ...`; sponsors
+/// whose neighbours across rows are at the grid offsets), whose candidates `s + o, s + o + 1, ...`
+/// lie in another row, are likewise placed, free, have not moved and must
 /// move. Processed one by one they would not affect each other, so the run is checked and written a
 /// chunk at a time. List entries are written as one by one, except those whose neighbour is in the
 /// run or among the sponsors: that neighbour has moved by the time the entry would be read, so the
 /// entry could only be skipped. Returns how many entries were consumed (0: take the one-by-one path
-/// for the next entry; 1 with nothing written: its candidate had moved already, as the one-by-one
-/// path would find).
+/// for the next entry; entries whose candidates had all moved already are consumed with nothing
+/// written, as the one-by-one path would find).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn batch<const MASK: u8>(
@@ -980,7 +998,7 @@ fn batch<const MASK: u8>(
     let width = b.width;
     let n = pos.len();
     let s0 = lists[list + head] as usize;
-    if b.interior.get(s0) != Some(&1) {
+    if b.across.get(s0) != Some(&1) {
         return 0;
     }
     let c0 = s0.wrapping_add_signed(o);
@@ -995,7 +1013,7 @@ fn batch<const MASK: u8>(
         while k < RUN
             && head + k < end
             && lists[list + head + k] as usize == step(k)
-            && b.interior.get(step(k)) == Some(&1)
+            && b.across.get(step(k)) == Some(&1)
             && stamp.get(step(k).wrapping_add_signed(o)) == Some(&g)
         {
             k += 1;
@@ -1054,8 +1072,8 @@ fn batch<const MASK: u8>(
             // Near the list's end: one element, checked as one by one.
             let ok = head + m < end
                 && lists[list + head + m] as usize == s
-                && b.interior.get(s) == Some(&1)
-                && b.interior.get(c) == Some(&1)
+                && b.across.get(s) == Some(&1)
+                && b.across.get(c) == Some(&1)
                 && stamp[c] != g
                 && b.flags[c] & FIXED == 0
                 && b.slot_class[s * width + t] == cls;
@@ -1104,7 +1122,7 @@ fn batch<const MASK: u8>(
             }
         }
         // Pushes across rows, away from the sponsors (no neighbour in the run there: the candidates
-        // are interior and distinct rows apart), written without a branch: each slot takes the entry,
+        // are placed by the grid offsets and distinct rows apart), written without a branch: each slot takes the entry,
         // the end advances only for unmoved neighbours (the list has room: `c` is not in it yet).
         for (u, tail) in tail.iter_mut().enumerate().take(width) {
             let ou = b.offs[u];
@@ -1113,7 +1131,7 @@ fn batch<const MASK: u8>(
             }
             let mut end = *tail;
             let list = &mut lists[u * n..(u + 1) * n];
-            // In range: the candidates are interior.
+            // In range: the candidates' neighbours across rows are at the grid offsets.
             let d = c.wrapping_add_signed(ou);
             #[cfg(target_arch = "x86_64")]
             if let Some(v) = wide {
@@ -1150,7 +1168,8 @@ fn batch<const MASK: u8>(
         let ou = b.offs[u];
         if ou.unsigned_abs() == 1 {
             for c in [c0, c0 + m - 1] {
-                let d = c.wrapping_add_signed(ou);
+                // The real neighbour: a row's end has padding there (itself, moved).
+                let d = b.neighbour(c, u);
                 if !run.contains(&d) && stamp.get(d) != Some(&g) {
                     lists[u * n + *tail] = c as u32;
                     *tail += 1;

@@ -39,6 +39,9 @@ pub(crate) struct Stencil {
     /// 1 where an element's slots hold exactly the neighbours at `offs` (a fact of the lattice: not a
     /// border, not a wrap seam). The chain reaction finds those neighbours by adding the offset.
     pub(crate) interior: Vec<u8>,
+    /// 1 where an element's slots hold the neighbours at `offs`, except along x where they may also
+    /// be padding (the ends of a row): the chain reaction's runs across rows take such elements.
+    pub(crate) across: Vec<u8>,
     /// 1 where the rest offsets to an element's neighbours sum to zero up to rounding.
     balanced: Vec<u8>,
     /// Elements per slab (a row of a sheet, a layer of a volume), and whether every element's
@@ -138,6 +141,17 @@ impl Stencil {
                     as u8
             })
             .collect();
+        let across = rows
+            .clone()
+            .enumerate()
+            .map(|(i, row)| {
+                let at = |t: usize| i as isize + offs[t];
+                row.iter().enumerate().all(|(t, &j)| {
+                    ((0..n as isize).contains(&at(t)) && j as isize == at(t))
+                        || (slot_axis[t] == 0 && j as usize == i)
+                }) as u8
+            })
+            .collect();
         let rest = &body.lattice.rest;
         let balanced = rows
             .clone()
@@ -167,6 +181,7 @@ impl Stencil {
             dims,
             offs,
             interior,
+            across,
             balanced,
             slab,
             slab_local,
