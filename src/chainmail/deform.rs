@@ -841,6 +841,17 @@ mod wide {
         ) else {
             return 0;
         };
+        // Moved in the run's order: `c, c - 1, ...`.
+        let order = pulp::cast::<u32x16, [u32; CHUNK]>(v.sub_u32s(v.splat_u32s(c as u32), IOTA));
+        let sponsors = v.add_u32s(v.splat_u32s(ls as u32), IOTA);
+        if k == CHUNK {
+            *o = pulp::cast(pc);
+            *p = pulp::cast(x);
+            *stw = pulp::cast(gs);
+            *sp = pulp::cast(sponsors);
+            moved.extend_from_slice(&order);
+            return k;
+        }
         // The top `k` lanes take the moves; the others are written back as they were.
         let lanes = pulp::b16((((1u32 << k) - 1) << (CHUNK - k)) as u16);
         let coords = ((1u64 << (3 * k)) - 1) << (3 * (CHUNK - k));
@@ -855,9 +866,7 @@ mod wide {
         *o = pulp::cast(new_old);
         *p = pulp::cast(x);
         *stw = pulp::cast(v.select_u32s(lanes, gs, st_was));
-        *sp = pulp::cast(v.select_u32s(lanes, v.add_u32s(v.splat_u32s(ls as u32), IOTA), sp_was));
-        // Moved in the run's order: `c, c - 1, ...`.
-        let order = pulp::cast::<u32x16, [u32; CHUNK]>(v.sub_u32s(v.splat_u32s(c as u32), IOTA));
+        *sp = pulp::cast(v.select_u32s(lanes, sponsors, sp_was));
         moved.extend_from_slice(&order[..k]);
         k
     }
