@@ -506,3 +506,51 @@ fn banded_sweeps_match_the_generic_path() {
         }
     }
 }
+
+/// Grasps in the middle of wide rows: the lists across rows then carry runs up the row (right of the
+/// grasp) and down it (left of it), long enough for the chain reaction's whole chunks both ways, with
+/// rigid, soft and two-material bodies, cuts and a pin. Moves, their order and sponsors must be the
+/// reference's.
+#[test]
+fn grasps_mid_row_match_the_reference() {
+    for dims in [[70, 40, 1], [40, 20, 4]] {
+        for (material, cuts) in [
+            (Material::rigid(), &[][..]),
+            (Material::relative(1.1, 0.9, 0.2), &[][..]),
+            (Material::relative(1.2, 0.8, 0.3), &[5, 900, 1234, 2222, 4000][..]),
+        ] {
+            let lattice = Lattice::grid(&GridSpec::uniform(dims, 0.01)).expect("grid");
+            let n = lattice.element_count() as u32;
+            let dressing = Dressing { stiffness: 2.0, region_x: 0.05, pins: &[n - 3], holds: &[], cuts };
+            let mut body = dress(lattice, material, &dressing);
+            let mut ws = Workspace::new(&body);
+            let mut pos = body.positions().to_vec();
+            let [nx, ny, nz] = dims;
+            let middle = (nz / 2 * ny + ny / 2) * nx + nx / 2;
+            for (step, (e, d)) in [
+                (middle, [0.02, 0.015, 0.004]),
+                (middle + 7, [-0.03, 0.01, -0.002]),
+                (middle - nx + 20, [0.0, -0.025, 0.01]),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let p = pos[e];
+                let target = [p[0] + d[0], p[1] + d[1], p[2] + d[2]];
+                let r = body.deform(&mut ws, ElementId(e as u32), target, Pass::All).expect("deform");
+                let (fraction, moved, sponsors) = reference_deform(&body, &mut pos, e, target, Pass::All);
+                assert_eq!(r.fraction, fraction, "{dims:?} step {step}");
+                assert!(same(body.positions(), &pos), "{dims:?}: positions differ after move {step}");
+                let got: Vec<usize> = ws.moved().map(|m| m.index()).collect();
+                assert_eq!(got, moved, "{dims:?}: order of moves {step}");
+                for (&m, &s) in moved.iter().zip(&sponsors) {
+                    assert_eq!(
+                        ws.sponsor(ElementId(m as u32)),
+                        Some(ElementId(s as u32)),
+                        "{dims:?} step {step}"
+                    );
+                }
+            }
+        }
+    }
+}
