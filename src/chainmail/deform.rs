@@ -549,6 +549,18 @@ fn word(bytes: &[u8]) -> Option<u128> {
     bytes.first_chunk::<CHUNK>().map(|b| u128::from_le_bytes(*b))
 }
 
+/// The byte checks of sixteen sponsors from `s` and sixteen candidates from `c` (in memory order):
+/// byte `i` is non-zero where sponsor or candidate `i` has a neighbour across rows off the grid
+/// offsets, or the candidate is pinned or held.
+#[inline(always)]
+fn bad_bytes(b: Slices<'_>, s: usize, c: usize) -> Option<u128> {
+    // The flags are 0 or 1, so `x ^ ONES` is non-zero exactly where one is 0.
+    const ONES: u128 = u128::MAX / 255;
+    let (across_s, across_c) = (b.across.get(s..).and_then(word)?, b.across.get(c..).and_then(word)?);
+    let flags = b.flags.get(c..).and_then(word)?;
+    Some((across_s ^ ONES) | (across_c ^ ONES) | (flags & (ONES * FIXED as u128)))
+}
+
 /// How many leading elements of a chunk pass the one-by-one path's checks, for sponsors `s..s + CHUNK`
 /// (list entries `entries`) and candidates `c..c + CHUNK` through slot `t`, whose run has the class
 /// of `bounds` (from element `s - after`): entry in sequence, sponsor and candidate with their
@@ -578,16 +590,9 @@ fn check_chunk<const MASK: u8>(
     ) else {
         return 0;
     };
-    let (Some(inner_s), Some(inner_c), Some(flags)) = (
-        word(&b.across[s.min(b.across.len())..]),
-        word(&b.across[c.min(b.across.len())..]),
-        word(&b.flags[c..]),
-    ) else {
+    let Some(bad_bytes) = bad_bytes(b, s, c) else {
         return 0;
     };
-    // Bytes: the flags are 0 or 1, so `x ^ ONES` is non-zero exactly where one is 0.
-    const ONES: u128 = u128::MAX / 255;
-    let bad_bytes = (inner_s ^ ONES) | (inner_c ^ ONES) | (flags & (ONES * FIXED as u128));
     // The run's first element has the run's class by definition; the others must not change it.
     let mut bad = u32::from(breaks) & !u32::from(after == 0);
     for k in 0..CHUNK {
@@ -640,7 +645,7 @@ fn wide_chunk(
 /// straight from the registers the check computed (no round trip through memory).
 #[cfg(target_arch = "x86_64")]
 mod wide {
-    use super::{CHUNK, FIXED, Pattern, Slices, word};
+    use super::{CHUNK, Pattern, Slices};
     use pulp::Simd;
     use pulp::x86::V4;
     use pulp::{f32x16, u32x16};
@@ -651,6 +656,24 @@ mod wide {
     #[inline(always)]
     fn load(x: &[u32]) -> Option<u32x16> {
         x.first_chunk::<CHUNK>().map(|a| pulp::cast(*a))
+    }
+
+    /// The candidates `pc` clamped into their boxes around the sponsors `ps` (as `clamp_masked`, by
+    /// comparisons, bit for bit), and a bit at `3 i` for each element `i` the clamp leaves in place.
+    #[inline(always)]
+    fn clamp(v: V4, ps: [f32x16; 3], pc: [f32x16; 3], bounds: &Pattern) -> ([f32x16; 3], u64) {
+        let lo: [f32x16; 3] = pulp::cast(bounds.lo);
+        let hi: [f32x16; 3] = pulp::cast(bounds.hi);
+        let mut x = pc;
+        let mut same = 0u64;
+        for i in 0..3 {
+            let (l, h) = (v.sub_f32s(ps[i], hi[i]), v.sub_f32s(ps[i], lo[i]));
+            let y = v.select_f32x16(v.cmp_lt_f32x16(pc[i], l), l, pc[i]);
+            x[i] = v.select_f32x16(v.cmp_gt_f32x16(y, h), h, y);
+            same |= (v.cmp_eq_f32x16(x[i], pc[i]).0 as u64) << (CHUNK * i);
+        }
+        // An element stays put when all three of its lanes do.
+        (x, same & (same >> 1) & (same >> 2) & 0o1111_1111_1111_1111)
     }
 
     /// Sixteen positions from the start of `x`, as three vectors.
@@ -685,33 +708,16 @@ mod wide {
         ) else {
             return (0, false);
         };
-        let (Some(inner_s), Some(inner_c), Some(flags), Some(breaks)) = (
-            b.across.get(s..).and_then(word),
-            b.across.get(c..).and_then(word),
-            b.flags.get(c..).and_then(word),
-            super::class_breaks(b, t, s),
-        ) else {
+        let (Some(bad_bytes), Some(breaks)) = (super::bad_bytes(b, s, c), super::class_breaks(b, t, s))
+        else {
             return (0, false);
         };
-        const ONES: u128 = u128::MAX / 255;
-        let bad_bytes = (inner_s ^ ONES) | (inner_c ^ ONES) | (flags & (ONES * FIXED as u128));
         let gs = v.splat_u32s(g);
         let in_sequence = v.equal_u32s(e, v.add_u32s(v.splat_u32s(s as u32), IOTA)).0;
         let unmoved = !v.equal_u32s(st, gs).0;
         // The run's first element has the run's class by definition; the others must not change it.
         let bad = !(in_sequence & unmoved) | breaks & !u16::from(after == 0);
-        let lo: [f32x16; 3] = pulp::cast(bounds.lo);
-        let hi: [f32x16; 3] = pulp::cast(bounds.hi);
-        let mut x = pc;
-        let mut same = 0u64;
-        for i in 0..3 {
-            // As `clamp_lane`: `pc` into `[ps - hi, ps - lo]`, by comparisons.
-            let (l, h) = (v.sub_f32s(ps[i], hi[i]), v.sub_f32s(ps[i], lo[i]));
-            let y = v.select_f32x16(v.cmp_lt_f32x16(pc[i], l), l, pc[i]);
-            x[i] = v.select_f32x16(v.cmp_gt_f32x16(y, h), h, y);
-            same |= (v.cmp_eq_f32x16(x[i], pc[i]).0 as u64) << (CHUNK * i);
-        }
-        let still = same & (same >> 1) & (same >> 2) & 0o1111_1111_1111_1111;
+        let (x, still) = clamp(v, ps, pc, bounds);
         let k = (bad.trailing_zeros() as usize)
             .min(bad_bytes.trailing_zeros() as usize / 8)
             .min(still.trailing_zeros() as usize / 3)
@@ -721,44 +727,83 @@ mod wide {
             *q = pulp::cast(x);
             return (k, false);
         }
-        let (Some(o), Some(p), Some(st), Some(sp)) = (
-            old.get_mut(c..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
-            pos.get_mut(c..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
-            stamp.get_mut(c..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
-            sponsor.get_mut(c..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
-        ) else {
+        let sponsors = v.add_u32s(v.splat_u32s(s as u32), IOTA);
+        let order = pulp::cast::<u32x16, [u32; CHUNK]>(v.add_u32s(v.splat_u32s(c as u32), IOTA));
+        // The first `k` lanes.
+        let lanes = ((1u32 << k) - 1) as u16;
+        let moves = Moves { c, pc, x, g, sponsors, lanes, order: &order[..k] };
+        if !moves.write(v, [pos, old], [stamp, sponsor], moved) {
             // Not reached (the reads above covered the same range); the caller writes it instead.
             *q = pulp::cast(x);
             return (k, false);
-        };
-        let sponsors = v.add_u32s(v.splat_u32s(s as u32), IOTA);
-        let candidates = pulp::cast::<u32x16, [u32; CHUNK]>(v.add_u32s(v.splat_u32s(c as u32), IOTA));
-        if k == CHUNK {
-            *o = pulp::cast(pc);
-            *p = pulp::cast(x);
-            *st = pulp::cast(gs);
-            *sp = pulp::cast(sponsors);
-            moved.extend_from_slice(&candidates);
-        } else {
-            // The first `k` lanes take the moves; the others are written back as they were (they
-            // are other elements than the moved ones, and nothing else writes them meanwhile).
-            let lanes = pulp::b16(((1u32 << k) - 1) as u16);
-            let coords = (1u64 << (3 * k)) - 1;
-            let was: [f32x16; 3] = pulp::cast(*o);
-            let mut new_old = was;
-            for i in 0..3 {
-                let m = pulp::b16((coords >> (CHUNK * i)) as u16);
-                x[i] = v.select_f32x16(m, x[i], pc[i]);
-                new_old[i] = v.select_f32x16(m, pc[i], was[i]);
-            }
-            let (st_was, sp_was): (u32x16, u32x16) = (pulp::cast(*st), pulp::cast(*sp));
-            *o = pulp::cast(new_old);
-            *p = pulp::cast(x);
-            *st = pulp::cast(v.select_u32s(lanes, gs, st_was));
-            *sp = pulp::cast(v.select_u32s(lanes, sponsors, sp_was));
-            moved.extend_from_slice(&candidates[..k]);
         }
         (k, true)
+    }
+
+    /// The writes of a chunk's moves: candidates from `c` (memory order) at `pc`, moving to `x`, in
+    /// the lanes set in `lanes`, with `sponsors`; `order` is the moved list's part.
+    struct Moves<'a> {
+        c: usize,
+        pc: [f32x16; 3],
+        x: [f32x16; 3],
+        g: u32,
+        sponsors: u32x16,
+        lanes: u16,
+        order: &'a [u32],
+    }
+
+    impl Moves<'_> {
+        /// Writes new and old positions, stamps, sponsors and the moved list; the lanes not moved are
+        /// written back as they were (they are other elements than the moved ones, and nothing else
+        /// writes them meanwhile). `false`, with nothing written, if the range is not in the body.
+        #[inline(always)]
+        fn write(
+            &self,
+            v: V4,
+            [pos, old]: [&mut [[f32; 3]]; 2],
+            [stamp, sponsor]: [&mut [u32]; 2],
+            moved: &mut Vec<u32>,
+        ) -> bool {
+            let &Moves { c, pc, mut x, g, sponsors, lanes, order } = self;
+            let (Some(o), Some(p), Some(st), Some(sp)) = (
+                old.get_mut(c..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
+                pos.get_mut(c..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
+                stamp.get_mut(c..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+                sponsor.get_mut(c..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+            ) else {
+                return false;
+            };
+            let gs = v.splat_u32s(g);
+            if lanes == u16::MAX {
+                *o = pulp::cast(pc);
+                *p = pulp::cast(x);
+                *st = pulp::cast(gs);
+                *sp = pulp::cast(sponsors);
+            } else {
+                // Each element's three coordinates.
+                let coords =
+                    (0..CHUNK).filter(|&i| lanes >> i & 1 == 1).fold(0u64, |m, i| m | 0b111 << (3 * i));
+                let was: [f32x16; 3] = pulp::cast(*o);
+                let mut new_old = was;
+                for i in 0..3 {
+                    let m = pulp::b16((coords >> (CHUNK * i)) as u16);
+                    x[i] = v.select_f32x16(m, x[i], pc[i]);
+                    new_old[i] = v.select_f32x16(m, pc[i], was[i]);
+                }
+                let (st_was, sp_was): (u32x16, u32x16) = (pulp::cast(*st), pulp::cast(*sp));
+                let lanes = pulp::b16(lanes);
+                *o = pulp::cast(new_old);
+                *p = pulp::cast(x);
+                *st = pulp::cast(v.select_u32s(lanes, gs, st_was));
+                *sp = pulp::cast(v.select_u32s(lanes, sponsors, sp_was));
+            }
+            match order.first_chunk::<CHUNK>() {
+                // A fixed length: vector moves, not a call.
+                Some(all) if order.len() == CHUNK => moved.extend_from_slice(all),
+                _ => moved.extend_from_slice(order),
+            }
+            true
+        }
     }
 
     /// [`chunk`] for a run down the row: sponsors `s, s - 1, ..., s - 15` (list entries in that
@@ -792,32 +837,17 @@ mod wide {
         };
         // Change bits of elements `ls + 1 ..= s + 1`: element `ls + i` keeps the run's class while
         // every bit `j >= i` is clear (bit 15, the element above the chunk, matters only after it).
-        let (Some(inner_s), Some(inner_c), Some(flags), Some(breaks)) = (
-            b.across.get(ls..).and_then(word),
-            b.across.get(lc..).and_then(word),
-            b.flags.get(lc..).and_then(word),
-            super::class_breaks(b, t, ls + 1),
-        ) else {
+        let (Some(bad_bytes), Some(breaks)) =
+            (super::bad_bytes(b, ls, lc), super::class_breaks(b, t, ls + 1))
+        else {
             return 0;
         };
-        const ONES: u128 = u128::MAX / 255;
-        let bad_bytes = (inner_s ^ ONES) | (inner_c ^ ONES) | (flags & (ONES * FIXED as u128));
         let gs = v.splat_u32s(g);
         // Entries in list order: lane `k` is sponsor `s - k`.
         let in_sequence = v.equal_u32s(e, v.sub_u32s(v.splat_u32s(s as u32), IOTA)).0;
         let moved_now = v.equal_u32s(st, gs).0;
         let breaks = breaks & if after == 0 { 0x7fff } else { 0xffff };
-        let lo: [f32x16; 3] = pulp::cast(bounds.lo);
-        let hi: [f32x16; 3] = pulp::cast(bounds.hi);
-        let mut x = pc;
-        let mut same = 0u64;
-        for i in 0..3 {
-            let (l, h) = (v.sub_f32s(ps[i], hi[i]), v.sub_f32s(ps[i], lo[i]));
-            let y = v.select_f32x16(v.cmp_lt_f32x16(pc[i], l), l, pc[i]);
-            x[i] = v.select_f32x16(v.cmp_gt_f32x16(y, h), h, y);
-            same |= (v.cmp_eq_f32x16(x[i], pc[i]).0 as u64) << (CHUNK * i);
-        }
-        let still = same & (same >> 1) & (same >> 2) & 0o1111_1111_1111_1111;
+        let (x, still) = clamp(v, ps, pc, bounds);
         // The highest failing lane, by memory order (16 when none fails).
         let top =
             |bits: u128, per: u32| if bits == 0 { None } else { Some((127 - bits.leading_zeros()) / per) };
@@ -833,42 +863,12 @@ mod wide {
         if k == 0 || k + after < 2 {
             return 0;
         }
-        let (Some(o), Some(p), Some(stw), Some(sp)) = (
-            old.get_mut(lc..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
-            pos.get_mut(lc..).and_then(<[[f32; 3]]>::first_chunk_mut::<CHUNK>),
-            stamp.get_mut(lc..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
-            sponsor.get_mut(lc..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
-        ) else {
-            return 0;
-        };
-        // Moved in the run's order: `c, c - 1, ...`.
+        // Moved in the run's order: `c, c - 1, ...`; the top `k` lanes.
         let order = pulp::cast::<u32x16, [u32; CHUNK]>(v.sub_u32s(v.splat_u32s(c as u32), IOTA));
         let sponsors = v.add_u32s(v.splat_u32s(ls as u32), IOTA);
-        if k == CHUNK {
-            *o = pulp::cast(pc);
-            *p = pulp::cast(x);
-            *stw = pulp::cast(gs);
-            *sp = pulp::cast(sponsors);
-            moved.extend_from_slice(&order);
-            return k;
-        }
-        // The top `k` lanes take the moves; the others are written back as they were.
-        let lanes = pulp::b16((((1u32 << k) - 1) << (CHUNK - k)) as u16);
-        let coords = ((1u64 << (3 * k)) - 1) << (3 * (CHUNK - k));
-        let was: [f32x16; 3] = pulp::cast(*o);
-        let mut new_old = was;
-        for i in 0..3 {
-            let m = pulp::b16((coords >> (CHUNK * i)) as u16);
-            x[i] = v.select_f32x16(m, x[i], pc[i]);
-            new_old[i] = v.select_f32x16(m, pc[i], was[i]);
-        }
-        let (st_was, sp_was): (u32x16, u32x16) = (pulp::cast(*stw), pulp::cast(*sp));
-        *o = pulp::cast(new_old);
-        *p = pulp::cast(x);
-        *stw = pulp::cast(v.select_u32s(lanes, gs, st_was));
-        *sp = pulp::cast(v.select_u32s(lanes, sponsors, sp_was));
-        moved.extend_from_slice(&order[..k]);
-        k
+        let lanes = (((1u32 << k) - 1) << (CHUNK - k)) as u16;
+        let moves = Moves { c: lc, pc, x, g, sponsors, lanes, order: &order[..k] };
+        if moves.write(v, [pos, old], [stamp, sponsor], moved) { k } else { 0 }
     }
 
     /// [`super::batch`] for a run down the row (entries `s0, s0 - 1, ...`), a chunk at a time, as
@@ -907,23 +907,7 @@ mod wide {
                     continue;
                 }
                 let list = &mut lists[u * n..(u + 1) * n];
-                let d = c.wrapping_add_signed(ou);
-                let lanes = (((1u32 << k) - 1) << (CHUNK - k)) as u16;
-                let mut end = *tail;
-                if let (Some(ds), Some(slots)) = (
-                    d.checked_sub(CHUNK - 1).and_then(|lo| stamp.get(lo..)).and_then(load),
-                    list.get_mut(end..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
-                ) && v.equal_u32s(ds, v.splat_u32s(g)).0 & lanes == 0
-                {
-                    *slots = pulp::cast(v.sub_u32s(v.splat_u32s(c as u32), IOTA));
-                    end += k;
-                } else {
-                    for j in 0..k {
-                        list[end] = (c - j) as u32;
-                        end += (stamp[d - j] != g) as usize;
-                    }
-                }
-                *tail = end;
+                push(v, stamp, [c, c.wrapping_add_signed(ou), k], true, g, list, tail);
             }
             m += k;
             if k < CHUNK {
@@ -933,48 +917,44 @@ mod wide {
         if m == 0 {
             return 0;
         }
-        // Along the row only the run's two ends can have a neighbour outside it.
-        let run = c0 + 1 - m..c0 + 1;
-        for (u, tail) in tail.iter_mut().enumerate().take(b.width) {
-            let ou = b.offs[u];
-            if ou.unsigned_abs() == 1 {
-                for c in [c0, c0 + 1 - m] {
-                    // The real neighbour: a row's end has padding there (itself, moved).
-                    let d = b.neighbour(c, u);
-                    if !run.contains(&d) && stamp.get(d) != Some(&g) {
-                        lists[u * n + *tail] = c as u32;
-                        *tail += 1;
-                    }
-                }
-            }
-        }
+        super::push_ends(b, [c0, c0 + 1 - m], stamp, g, lists, tail);
         m
     }
 
-    /// Pushes candidates `c..c + k` to a candidate list (`list`, ending at `end`) where their
-    /// neighbours `d..d + k` have not moved: sixteen at once when none has.
+    /// Pushes candidates `c, c ± 1, ...` (`k` of them, down the row if `down`) to a candidate list
+    /// (`list`, ending at `end`) where their neighbours `d, d ± 1, ...` have not moved: sixteen at
+    /// once when none has.
     #[inline(always)]
     pub(super) fn push(
         v: V4,
         stamp: &[u32],
         [c, d, k]: [usize; 3],
+        down: bool,
         g: u32,
         list: &mut [u32],
         end: &mut usize,
     ) {
-        let lanes = ((1u32 << k) - 1) as u16;
-        if let (Some(ds), Some(slots)) =
-            (stamp.get(d..).and_then(load), list.get_mut(*end..).and_then(<[u32]>::first_chunk_mut::<CHUNK>))
-            && v.equal_u32s(ds, v.splat_u32s(g)).0 & lanes == 0
+        // The neighbours' stamps in memory order: the first `k` lanes up the row, the last `k` down.
+        let (first, lanes) = if down {
+            (d.checked_sub(CHUNK - 1), (((1u32 << k) - 1) << (CHUNK - k)) as u16)
+        } else {
+            (Some(d), ((1u32 << k) - 1) as u16)
+        };
+        let cs = v.splat_u32s(c as u32);
+        if let (Some(ds), Some(slots)) = (
+            first.and_then(|f| stamp.get(f..)).and_then(load),
+            list.get_mut(*end..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
+        ) && v.equal_u32s(ds, v.splat_u32s(g)).0 & lanes == 0
         {
             // Entries past `k` land beyond the list's end, where nothing reads them.
-            *slots = pulp::cast(v.add_u32s(v.splat_u32s(c as u32), IOTA));
+            *slots = pulp::cast(if down { v.sub_u32s(cs, IOTA) } else { v.add_u32s(cs, IOTA) });
             *end += k;
             return;
         }
-        for (j, &x) in stamp[d..d + k].iter().enumerate() {
-            list[*end] = (c + j) as u32;
-            *end += (x != g) as usize;
+        for j in 0..k {
+            let (c, d) = if down { (c - j, d - j) } else { (c + j, d + j) };
+            list[*end] = c as u32;
+            *end += (stamp[d] != g) as usize;
         }
     }
 }
@@ -1144,7 +1124,7 @@ fn batch<const MASK: u8>(
             let d = c.wrapping_add_signed(ou);
             #[cfg(target_arch = "x86_64")]
             if let Some(v) = wide {
-                wide::push(v, stamp, [c, d, k], g, list, &mut end);
+                wide::push(v, stamp, [c, d, k], false, g, list, &mut end);
                 *tail = end;
                 continue;
             }
@@ -1170,23 +1150,35 @@ fn batch<const MASK: u8>(
     if m == 0 {
         return 0;
     }
-    // Along the row only the run's two ends can have a neighbour outside it; back toward the sponsors
-    // every neighbour has moved.
-    let run = c0..c0 + m;
-    for (u, tail) in tail.iter_mut().enumerate().take(width) {
-        let ou = b.offs[u];
-        if ou.unsigned_abs() == 1 {
-            for c in [c0, c0 + m - 1] {
-                // The real neighbour: a row's end has padding there (itself, moved).
+    push_ends(b, [c0, c0 + m - 1], stamp, g, lists, tail);
+    m
+}
+
+/// The pushes along the row of a run of moved candidates from `first` to `last` (both ends
+/// included, either way along the row): only its two ends can have a neighbour there outside the
+/// run (and back toward the sponsors every neighbour has moved).
+fn push_ends(
+    b: Slices<'_>,
+    [first, last]: [usize; 2],
+    stamp: &[u32],
+    g: u32,
+    lists: &mut [u32],
+    tail: &mut [usize],
+) {
+    let n = stamp.len();
+    for (u, tail) in tail.iter_mut().enumerate().take(b.width) {
+        if b.offs[u].unsigned_abs() == 1 {
+            for c in [first, last].into_iter().take(if first == last { 1 } else { 2 }) {
+                // The real neighbour: a row's end has padding there (itself, moved), and the run's
+                // own elements have moved by now.
                 let d = b.neighbour(c, u);
-                if !run.contains(&d) && stamp.get(d) != Some(&g) {
+                if stamp.get(d) != Some(&g) {
                     lists[u * n + *tail] = c as u32;
                     *tail += 1;
                 }
             }
         }
     }
-    m
 }
 
 const fn mask_of<const MASK: u8>() -> [bool; 3] {
