@@ -676,6 +676,41 @@ mod wide {
         (x, same & (same >> 1) & (same >> 2) & 0o1111_1111_1111_1111)
     }
 
+    /// What a chunk's checks read: sixteen list entries (in list order), and from the lowest
+    /// sponsor and candidate in memory `[ls, lc]` on, the candidates' stamps, the sponsors' and
+    /// candidates' positions, their byte checks ([`super::bad_bytes`]) and the class change bits of
+    /// sixteen elements from `breaks_at` in slot `t`.
+    struct Loaded {
+        e: u32x16,
+        st: u32x16,
+        ps: [f32x16; 3],
+        pc: [f32x16; 3],
+        bad_bytes: u128,
+        breaks: u16,
+    }
+
+    impl Loaded {
+        #[inline(always)]
+        fn at(
+            b: Slices<'_>,
+            entries: &[u32],
+            stamp: &[u32],
+            pos: &[[f32; 3]],
+            [ls, lc]: [usize; 2],
+            t: usize,
+            breaks_at: usize,
+        ) -> Option<Self> {
+            Some(Self {
+                e: load(entries)?,
+                st: load(stamp.get(lc..)?)?,
+                ps: load3(pos.get(ls..)?)?,
+                pc: load3(pos.get(lc..)?)?,
+                bad_bytes: super::bad_bytes(b, ls, lc)?,
+                breaks: super::class_breaks(b, t, breaks_at)?,
+            })
+        }
+    }
+
     /// Sixteen positions from the start of `x`, as three vectors.
     #[inline(always)]
     fn load3(x: &[[f32; 3]]) -> Option<[f32x16; 3]> {
@@ -700,15 +735,8 @@ mod wide {
         q: &mut [f32; 3 * CHUNK],
         after: usize,
     ) -> (usize, bool) {
-        let (Some(e), Some(st), Some(ps), Some(pc)) = (
-            load(entries),
-            stamp.get(c..).and_then(load),
-            pos.get(s..).and_then(load3),
-            pos.get(c..).and_then(load3),
-        ) else {
-            return (0, false);
-        };
-        let (Some(bad_bytes), Some(breaks)) = (super::bad_bytes(b, s, c), super::class_breaks(b, t, s))
+        let Some(Loaded { e, st, ps, pc, bad_bytes, breaks }) =
+            Loaded::at(b, entries, stamp, pos, [s, c], t, s)
         else {
             return (0, false);
         };
@@ -827,18 +855,10 @@ mod wide {
         let (Some(ls), Some(lc)) = (s.checked_sub(CHUNK - 1), c.checked_sub(CHUNK - 1)) else {
             return 0;
         };
-        let (Some(e), Some(st), Some(ps), Some(pc)) = (
-            load(entries),
-            stamp.get(lc..).and_then(load),
-            pos.get(ls..).and_then(load3),
-            pos.get(lc..).and_then(load3),
-        ) else {
-            return 0;
-        };
         // Change bits of elements `ls + 1 ..= s + 1`: element `ls + i` keeps the run's class while
         // every bit `j >= i` is clear (bit 15, the element above the chunk, matters only after it).
-        let (Some(bad_bytes), Some(breaks)) =
-            (super::bad_bytes(b, ls, lc), super::class_breaks(b, t, ls + 1))
+        let Some(Loaded { e, st, ps, pc, bad_bytes, breaks }) =
+            Loaded::at(b, entries, stamp, pos, [ls, lc], t, ls + 1)
         else {
             return 0;
         };
