@@ -51,7 +51,7 @@ fn sheet(n: usize, layers: usize) -> Tissue {
 }
 
 fn grasped(tissue: Tissue) -> (World, [f32; 3]) {
-    let top = tissue.layers().len() - 1;
+    let top = 0; // the upper layer
     let n = (tissue.layers()[top].count as f32).sqrt() as u32;
     let e = ElementId(tissue.layers()[top].first + n / 2 + n * (n / 2));
     let start = tissue.world_position(e).expect("centre");

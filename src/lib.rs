@@ -37,6 +37,7 @@ pub mod render;
 pub mod runner;
 pub mod scene;
 pub mod simulation;
+pub mod snapshot;
 pub mod surface;
 pub mod tissue;
 pub mod training;

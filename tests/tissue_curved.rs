@@ -30,7 +30,7 @@ fn pull_at(
     let n = 24;
     let spec = common::two_layers(n, surface, pinned);
     let tissue = Tissue::build(&TissueSpec::Layered(spec)).expect("tissue");
-    let e = ElementId(tissue.layers()[1].first + (grasp_u + n * grasp_v) as u32);
+    let e = ElementId(tissue.layers()[0].first + (grasp_u + n * grasp_v) as u32);
     let start = tissue.world_position(e).expect("start");
     let mut world =
         World::new(tissue, WorldConfig { relax: RelaxBudget::sweeps(3), ..WorldConfig::default() });
@@ -84,7 +84,7 @@ fn cylinder_deforms_across_its_seam() {
     let (t, nu) = pull_at(s, Pinning::Boundary, 0, 12, [0.004, 0.0, 0.008]);
     check_seam(&t, nu);
     // Elements on both sides of the seam moved.
-    let layer = &t.layers()[1];
+    let layer = &t.layers()[0];
     let side = |i: usize| {
         let e = ElementId(layer.first + (i + nu * 12) as u32);
         let p = t.body().position(e).expect("p");
@@ -102,10 +102,10 @@ fn sphere_deforms_across_its_seam_and_near_a_pole() {
     // The poles are not lattice rows, but the drawn surface is closed: a fan round each pole.
     let mut meshes = Vec::new();
     t.fill_meshes(&mut meshes);
-    let nv = t.layers()[1].count as usize / nu;
+    let nv = t.layers()[0].count as usize / nu;
     assert_eq!(meshes[0].triangles.len(), 2 * nu * (nv - 1) + 2 * nu, "a hole at a pole");
     // The row nearest the pole stays a ring: no link of it collapsed or flew apart.
-    let layer = &t.layers()[1];
+    let layer = &t.layers()[0];
     for i in 0..nu {
         let a = ElementId(layer.first + i as u32);
         let b = ElementId(layer.first + ((i + 1) % nu) as u32);

@@ -11,6 +11,9 @@ use dissect::simulation::{InstrumentKind, World, WorldConfig};
 use dissect::tissue::{CutDepth, CutSegment, LinkKind, Tissue};
 
 const N: usize = 25;
+/// Layer indices: the tissue lists its layers upper first.
+const UPPER: usize = 0;
+const LOWER: usize = 1;
 
 fn centre(t: &Tissue, layer: usize) -> ElementId {
     let l = &t.layers()[layer];
@@ -45,11 +48,11 @@ fn height(t: &Tissue, e: ElementId) -> f32 {
 #[test]
 fn lifting_the_upper_layer_drags_the_lower_one() {
     let tissue = plane(N);
-    let lower = centre(&tissue, 0);
+    let lower = centre(&tissue, LOWER);
     let mut world = world_with_grasp(tissue, [0.0, GAP, 0.0]);
     lift(&mut world, 0.015, 100);
     let t = world.tissue();
-    let upper = centre(t, 1);
+    let upper = centre(t, UPPER);
     assert!(height(t, upper) > 0.012, "upper lifted to {}", height(t, upper));
     assert!(height(t, lower) > 0.005, "lower followed only to {}", height(t, lower));
     assert!(height(t, upper) - height(t, lower) >= t.min_gap());
@@ -67,13 +70,13 @@ fn cut_fibres_let_the_layers_part_there_and_not_elsewhere() {
     let cut = tissue.apply_cuts();
     assert!(cut > 0);
     assert_eq!(tissue.damage().layer_links_cut, 0, "a cut between the layers cut a layer");
-    let lower = centre(&tissue, 0);
-    let far_lower = ElementId(tissue.layers()[0].first + (N / 2 + N * 3) as u32);
+    let lower = centre(&tissue, LOWER);
+    let far_lower = ElementId(tissue.layers()[LOWER].first + (N / 2 + N * 3) as u32);
     let far_upper = ElementId(far_lower.0 + (N * N) as u32);
     let mut world = world_with_grasp(tissue, [0.0, GAP, 0.0]);
     lift(&mut world, 0.015, 100);
     let t = world.tissue();
-    let upper = centre(t, 1);
+    let upper = centre(t, UPPER);
     assert!(height(t, upper) > 0.012);
     assert!(
         height(t, lower) < 0.002,
@@ -106,13 +109,13 @@ fn pushed_layer_does_not_pass_through_the_other() {
         }
     }
     let t = world.tissue();
-    assert!(height(t, centre(t, 1)) < -0.001, "the probe did not push the tissue down");
+    assert!(height(t, centre(t, UPPER)) < -0.001, "the probe did not push the tissue down");
 }
 
 #[test]
 fn a_cut_straight_across_a_sheet_leaves_two_components() {
     let mut tissue = plane(N);
-    assert_eq!(tissue.layer_components(1), 1);
+    assert_eq!(tissue.layer_components(UPPER), 1);
     tissue.queue_cut(CutSegment {
         from: [-0.04, GAP, 0.0013],
         to: [0.04, GAP, 0.0013],
@@ -120,12 +123,12 @@ fn a_cut_straight_across_a_sheet_leaves_two_components() {
     });
     let cut = tissue.apply_cuts();
     assert_eq!(cut as usize, N, "one link per column");
-    assert_eq!(tissue.layer_components(1), 2);
-    assert_eq!(tissue.layer_components(0), 1, "the lower layer was not touched");
+    assert_eq!(tissue.layer_components(UPPER), 2);
+    assert_eq!(tissue.layer_components(LOWER), 1, "the lower layer was not touched");
     assert_eq!(tissue.damage().layer_links_cut, N as u64);
     let events: Vec<_> = tissue.drain_events().collect();
     assert_eq!(events.len(), N);
-    assert!(events.iter().all(|e| e.kind == LinkKind::Layer(1)));
+    assert!(events.iter().all(|e| e.kind == LinkKind::Layer(UPPER as u8)));
     // The render mesh leaves out the triangles that spanned the cut.
     let mut meshes = Vec::new();
     tissue.fill_meshes(&mut meshes);

@@ -121,18 +121,6 @@ fn on_plane(origin: Vec3, dir: Vec3, point: Vec3, normal: Vec3) -> Option<Vec3> 
     (t > 0.0).then(|| origin + t * dir)
 }
 
-/// The element under a picking hit: snapshot layer `k` is the tissue's layer `n − 1 − k`. The element
-/// nearest the hit point in that layer (the picker's vertex is not always the nearest: when parry does
-/// not name the triangle hit it reports vertex 0, a corner), or the picked vertex if that fails.
-pub fn element_of(world: &World, hit: &Hit) -> Option<crate::chainmail::ElementId> {
-    let layers = world.tissue().layers();
-    let k = layers.len().checked_sub(1 + hit.layer)?;
-    let layer = layers.get(k)?;
-    world.tissue().nearest_element(hit.point, Some(k)).or_else(|| {
-        (hit.vertex < layer.count).then_some(crate::chainmail::ElementId(layer.first + hit.vertex))
-    })
-}
-
 impl Hand {
     /// Whether the left button is using the instrument.
     pub fn busy(&self) -> bool {
@@ -180,7 +168,7 @@ impl Hand {
                     return;
                 }
                 let Some(hit) = hit else { return };
-                let Some(e) = element_of(world, &hit) else { return };
+                let Some(e) = world.element_at(&hit) else { return };
                 out.push(Command::GraspElement(e));
                 self.tool.insert_mm = 0.0;
                 self.stroke = Some(Stroke::Pull { point: Vec3::from(hit.point), normal: forward });

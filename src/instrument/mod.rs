@@ -1,5 +1,5 @@
 //! Instruments: the probe that pushes, the forceps that grasp and pull, the scalpel that cuts. Each
-//! holds a pose; the world turns commands into what the instrument does to the tissue. Picking (a ray
+//! holds a pose; the world turns instrument commands into what the instrument does to the tissue. Picking (a ray
 //! from the cursor against the current tissue triangles) uses parry3d.
 //!
 //! Must not import wgpu, winit or egui.
@@ -8,10 +8,8 @@ mod pick;
 
 pub use pick::{Hit, Picker};
 
-use serde::{Deserialize, Serialize};
-
-use crate::chainmail::{ElementId, Material, MaterialId};
-use crate::simulation::{InstrumentKind, InstrumentPose};
+use crate::chainmail::ElementId;
+use crate::snapshot::{InstrumentKind, InstrumentPose};
 use crate::tissue::CutDepth;
 
 /// Radius of the probe's ball tip, metres.
@@ -73,9 +71,10 @@ impl Instrument {
     }
 }
 
-/// What a user (or a script) does with the instrument. Commands are gathered as they come and consumed
-/// once, at the start of the next step.
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+/// What a user (or a script) does with the instrument. The world gathers them (as
+/// [`crate::simulation::Command::Instrument`], which also serializes them) and consumes them once, at
+/// the start of the next step.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Command {
     /// Take another instrument (ends any cut; what the forceps hold stays held until `Release`).
     Select(InstrumentKind),
@@ -97,8 +96,4 @@ pub enum Command {
     Roll(f32),
     /// Point the instrument: unit vector from the tip to the handle.
     SetAxis([f32; 3]),
-    /// Retune a material of the tissue live (a slider), so that recordings replay it.
-    SetMaterial(MaterialId, Material),
-    /// Change the most relaxation sweeps per step.
-    SetRelaxSweeps(u32),
 }

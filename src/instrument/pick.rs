@@ -5,7 +5,7 @@ use parry3d::math::{Vec3, Vector};
 use parry3d::query::{Ray, RayCast};
 use parry3d::shape::TriMesh;
 
-use crate::simulation::Snapshot;
+use crate::snapshot::Snapshot;
 
 /// Where a ray met the tissue.
 #[derive(Clone, Copy, Debug, PartialEq)]

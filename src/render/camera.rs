@@ -3,7 +3,7 @@
 
 use glam::{Mat4, Vec2, Vec3};
 
-use crate::simulation::CameraSpec;
+use crate::snapshot::CameraSpec;
 
 /// Pitch is kept inside ±89° so the view never flips over the pole.
 const MAX_PITCH: f32 = 89.0_f32.to_radians();

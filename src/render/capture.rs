@@ -4,7 +4,7 @@
 use super::camera::OrbitCamera;
 use super::scene::{SceneRenderer, SceneView, Style};
 use super::{Gpu, RenderError};
-use crate::simulation::Snapshot;
+use crate::snapshot::Snapshot;
 
 /// Colour format of offscreen images: 8-bit sRGB RGBA, the bytes a PNG stores.
 pub const OFFSCREEN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;

@@ -4,7 +4,7 @@
 
 use std::f32::consts::PI;
 
-use crate::simulation::{InstrumentKind, InstrumentPose, LayerMesh, Snapshot};
+use crate::snapshot::{InstrumentKind, InstrumentPose, LayerMesh, Snapshot};
 
 /// Side of the square the sheets cover, metres.
 pub const EXTENT: f32 = 0.08;

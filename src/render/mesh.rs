@@ -5,7 +5,7 @@
 
 use glam::{Mat4, Quat, Vec3};
 
-use crate::simulation::{InstrumentKind, InstrumentPose};
+use crate::snapshot::{InstrumentKind, InstrumentPose};
 
 /// An indexed triangle mesh with per-vertex normals. Normal orientation does not matter for drawing
 /// (the shader turns normals towards the viewer), only their direction.

@@ -2,9 +2,9 @@
 //! ([`SceneRenderer`], [`SceneView`]), the orbit camera and picking rays ([`OrbitCamera`]), the procedural
 //! instrument models ([`mesh`]), a synthetic test scene ([`demo`]) and headless capture to PNG ([`Offscreen`], [`render_to_image`]).
 //!
-//! It reads only a [`Snapshot`](crate::simulation::Snapshot) and a
-//! [`CameraSpec`](crate::simulation::CameraSpec); it never reaches into the engine. It may import wgpu,
-//! glam, bytemuck, image and `crate::simulation`; never winit or egui (the app owns windows and passes
+//! It reads only a [`Snapshot`](crate::snapshot::Snapshot) and a
+//! [`CameraSpec`](crate::snapshot::CameraSpec); it never reaches into the engine. It may import wgpu,
+//! glam, bytemuck, image and `crate::snapshot`; never winit or egui (the app owns windows and passes
 //! a surface-compatible [`Gpu`] in). The render path itself uses no files or threads, so it can run in a
 //! browser later; only [`save_png`] and the blocking helpers touch the OS, and they are native-only.
 //!

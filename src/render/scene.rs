@@ -14,7 +14,7 @@ use glam::{Mat4, Vec3};
 use super::camera::OrbitCamera;
 use super::mesh::{self, Part};
 use super::{Gpu, RenderError};
-use crate::simulation::Snapshot;
+use crate::snapshot::Snapshot;
 
 const MESH_WGSL: &str =
     concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/mesh.wgsl"));

@@ -118,7 +118,8 @@ pub struct BrokenLink {
     pub link: u32,
     /// Its two elements.
     pub elements: [u32; 2],
-    /// What it was part of.
+    /// What it was part of. `Layer(n)` counts from the lowest layer here (0 is the lower of two), as
+    /// `state.json` has always written it, so that states of older runs still compare.
     pub kind: LinkKind,
     /// Cut or torn.
     pub reason: crate::chainmail::BreakReason,
@@ -151,7 +152,6 @@ impl State {
         let layers = tissue
             .layers()
             .iter()
-            .rev()
             .map(|l| LayerState {
                 name: l.name.clone(),
                 positions: (l.first..l.first + l.count)
@@ -160,12 +160,17 @@ impl State {
             })
             .collect();
         let body = tissue.body();
+        let lowest = tissue.layers().len().saturating_sub(1) as u8;
         let broken_links = (0..body.link_count() as u32)
             .map(LinkId)
             .filter_map(|l| {
                 let reason = body.link_broken(l)?;
                 let [a, b] = body.lattice().link_ends(l)?;
-                Some(BrokenLink { link: l.0, elements: [a.0, b.0], kind: tissue.link_kind(l)?, reason })
+                let kind = match tissue.link_kind(l)? {
+                    LinkKind::Layer(n) => LinkKind::Layer(lowest - n),
+                    k => k,
+                };
+                Some(BrokenLink { link: l.0, elements: [a.0, b.0], kind, reason })
             })
             .collect();
         Self { steps, layers, broken_links }

@@ -2,7 +2,9 @@
 
 use crate::instrument::Command;
 use crate::scene::{Action, Point};
-use crate::simulation::{InstrumentKind, World};
+use crate::simulation::Command as WorldCommand;
+use crate::simulation::World;
+use crate::snapshot::InstrumentKind;
 
 /// The world position of a script point in `world`'s tissue.
 pub fn resolve(p: &Point, world: &World) -> [f32; 3] {
@@ -155,8 +157,8 @@ impl Player {
             Action::At(n) => self.wait_until = Some(n),
             Action::Command(c) => {
                 match &c {
-                    Command::Select(k) => self.kind = Some(*k),
-                    Command::MoveTo(p) => self.tip = Some(*p),
+                    WorldCommand::Instrument(Command::Select(k)) => self.kind = Some(*k),
+                    WorldCommand::Instrument(Command::MoveTo(p)) => self.tip = Some(*p),
                     _ => {}
                 }
                 world.push(c)

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 
 use super::error::parse_error;
 use super::{Action, SceneError, Script};
-use crate::instrument::Command;
+use crate::simulation::Command;
 
 /// How often a recording reaches the disk.
 pub const FLUSH_EVERY: Duration = Duration::from_secs(1);

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::simulation::InstrumentKind;
+use crate::snapshot::InstrumentKind;
 
 use super::error::{FieldPath, Problem, SceneError, parse_error, problem};
 use super::validate::finite;
@@ -74,8 +74,8 @@ pub enum Action {
     At(u64),
     /// Forceps: close the jaws on this element (what a recording writes for a pick). No time.
     GraspElement(u32),
-    /// A raw instrument command, applied at once (what a recording writes for live input). No time.
-    Command(crate::instrument::Command),
+    /// A raw world command, applied at once (what a recording writes for live input). No time.
+    Command(crate::simulation::Command),
 }
 
 impl Action {
@@ -244,7 +244,7 @@ impl Script {
                 }
                 Action::Release | Action::GraspElement(_) => need(InstrumentKind::Forceps, held)?,
                 Action::Command(c) => {
-                    if let crate::instrument::Command::Select(k) = c {
+                    if let crate::simulation::Command::Instrument(crate::instrument::Command::Select(k)) = c {
                         held = Some(*k);
                     }
                 }

@@ -20,7 +20,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::chainmail::Material;
-use crate::simulation::{CameraSpec, InstrumentKind};
+use crate::snapshot::{CameraSpec, InstrumentKind};
 
 /// One training exercise: the tissue, the instruments offered, the cameras and the clock.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]

@@ -2,7 +2,7 @@
 //! the loader can point at its line and column.
 
 use crate::chainmail::{Limits, MAX_ELEMENTS, Material};
-use crate::simulation::CameraSpec;
+use crate::snapshot::CameraSpec;
 
 use super::error::{FieldPath, Problem, problem};
 use super::types::{

@@ -4,10 +4,12 @@
 //! engine.
 
 mod clock;
-mod snapshot;
+mod command;
 mod world;
 
 pub use clock::{FixedClock, MAX_FRAME_DELTA};
+pub use command::Command;
 pub use world::{PHASES, StepCounters, World, WorldConfig};
 
-pub use snapshot::{CameraSpec, InstrumentKind, InstrumentPose, LayerMesh, Snapshot};
+// The snapshot vocabulary lives one floor down, in `crate::snapshot`; re-exported for the app side.
+pub use crate::snapshot::{CameraSpec, InstrumentKind, InstrumentPose, LayerMesh, Snapshot};

@@ -4,10 +4,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::Snapshot;
-use crate::chainmail::RelaxBudget;
-use crate::instrument::{Command, GRASP_REACH, Instrument, PROBE_RADIUS};
-use crate::simulation::InstrumentKind;
+use super::Command;
+use crate::chainmail::{ElementId, RelaxBudget};
+use crate::instrument::{Command as InstrumentCommand, GRASP_REACH, Hit, Instrument, PROBE_RADIUS};
+use crate::snapshot::{InstrumentKind, Snapshot};
 use crate::tissue::{CutSegment, Tissue};
 
 /// The phases of a step, in the order they run.
@@ -133,9 +133,19 @@ impl World {
         &self.commands
     }
 
-    /// Queues a command for the next step.
-    pub fn push(&mut self, command: Command) {
-        self.commands.push(command);
+    /// Queues a command for the next step (an instrument command or a world command).
+    pub fn push(&mut self, command: impl Into<Command>) {
+        self.commands.push(command.into());
+    }
+
+    /// The element under a picking hit (the hit's layer is the snapshot's, upper first): the element of
+    /// that layer nearest the hit point (the picker's vertex is not always the nearest: when parry does
+    /// not name the triangle hit it reports vertex 0, a corner), or the picked vertex if that fails.
+    pub fn element_at(&self, hit: &Hit) -> Option<ElementId> {
+        let layer = self.tissue.layers().get(hit.layer)?;
+        self.tissue
+            .nearest_element(hit.point, Some(hit.layer))
+            .or_else(|| (hit.vertex < layer.count).then_some(ElementId(layer.first + hit.vertex)))
     }
 
     /// Advances one fixed step: input, chain reaction, normal pass, relaxation, contact, cuts and tears,
@@ -218,6 +228,19 @@ impl World {
 
     fn apply(&mut self, command: Command) {
         match command {
+            Command::Instrument(c) => self.apply_instrument(c),
+            Command::SetMaterial(id, m) => {
+                if let Err(e) = self.tissue.body_mut().set_material(id, m) {
+                    self.tissue.notice = Some(format!("material refused: {e}"));
+                }
+            }
+            Command::SetRelaxSweeps(n) => self.config.relax.max_sweeps = n,
+        }
+    }
+
+    fn apply_instrument(&mut self, command: InstrumentCommand) {
+        use InstrumentCommand as Command;
+        match command {
             Command::Select(kind) => {
                 // What the forceps hold stays clamped while another instrument is in use (two-handed
                 // teasing apart); taking the forceps back takes up the grasp where it is.
@@ -247,7 +270,7 @@ impl World {
                     return;
                 }
                 let tip = self.instrument.target;
-                let top = self.tissue.layers().len().checked_sub(1);
+                let top = (!self.tissue.layers().is_empty()).then_some(0);
                 // The outermost layer first; the lower one where the upper is out of reach (cut away).
                 let pick = [top, None].into_iter().find_map(|layer| {
                     let e = self.tissue.nearest_element(tip, layer)?;
@@ -283,12 +306,6 @@ impl World {
                     self.instrument.roll = r;
                 }
             }
-            Command::SetMaterial(id, m) => {
-                if let Err(e) = self.tissue.body_mut().set_material(id, m) {
-                    self.tissue.notice = Some(format!("material refused: {e}"));
-                }
-            }
-            Command::SetRelaxSweeps(n) => self.config.relax.max_sweeps = n,
             Command::SetAxis(a) => {
                 let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
                 if l.is_finite() && l > 0.0 {
@@ -298,7 +315,7 @@ impl World {
         }
     }
 
-    fn grasp(&mut self, e: crate::chainmail::ElementId) {
+    fn grasp(&mut self, e: ElementId) {
         self.instrument.grasped = Some(e);
         self.tissue.set_held(e, true);
         if let Some(p) = self.tissue.world_position(e) {

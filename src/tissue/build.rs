@@ -186,7 +186,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
                     let (a, b) = (id(i, j, k), id(i2, j, k));
                     let d3 = dist(world(rest[a.index()]), world(rest[b.index()]));
                     links.push(LinkSpec { a, b, rest: [du, 0.0, 0.0], scale: [du, du, d3] });
-                    kinds.push(LinkKind::Layer(k as u8));
+                    kinds.push(LinkKind::Layer((nl - 1 - k) as u8));
                     rest_len.push(d3);
                 }
                 if j + 1 < nv {
@@ -194,7 +194,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
                     let (a, b) = (id(i, j, k), id(i, j + 1, k));
                     let d3 = dist(world(rest[a.index()]), world(rest[b.index()]));
                     links.push(LinkSpec { a, b, rest: [0.0, dv, 0.0], scale: [dv, dv, d3] });
-                    kinds.push(LinkKind::Layer(k as u8));
+                    kinds.push(LinkKind::Layer((nl - 1 - k) as u8));
                     rest_len.push(d3);
                 }
             }
@@ -231,7 +231,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
     };
     for (l, kind) in kinds.iter().enumerate() {
         let m = match kind {
-            LinkKind::Layer(k) => layer_material[*k as usize],
+            LinkKind::Layer(k) => layer_material[nl - 1 - *k as usize],
             LinkKind::Connective => connective_material.unwrap_or(layer_material[0]),
         };
         body.set_link_material(LinkId(l as u32), m)?;
@@ -330,6 +330,8 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
             triangles,
         });
     }
+    // The tissue lists its layers upper first, as the scene does.
+    layers.reverse();
     let spacing = {
         let du = (sampling.u[nu - 1] - sampling.u[0]) / (nu - 1) as f32;
         let dv = (sampling.v[nv - 1] - sampling.v[0]) / (nv - 1) as f32;

@@ -117,8 +117,8 @@ impl Tissue {
                 let mid_u = 0.5 * (a[0] + b[0]);
                 let nl = self.layers.len() as u8;
                 let want = match seg.depth {
-                    CutDepth::Upper => LinkKind::Layer(nl - 1),
-                    CutDepth::Lower => LinkKind::Layer(0),
+                    CutDepth::Upper => LinkKind::Layer(0),
+                    CutDepth::Lower => LinkKind::Layer(nl - 1),
                     CutDepth::Between if nl == 2 => LinkKind::Connective,
                     CutDepth::Between => return 0,
                 };

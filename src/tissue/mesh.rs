@@ -3,7 +3,7 @@
 
 use super::{LinkKind, Tissue};
 use crate::chainmail::LinkId;
-use crate::simulation::LayerMesh;
+use crate::snapshot::LayerMesh;
 
 impl Tissue {
     /// Refills `out` with one mesh per layer, the upper layer first. Buffers are reused; triangles are
@@ -14,7 +14,7 @@ impl Tissue {
         while out.len() < nl {
             out.push(LayerMesh { topology_version: u64::MAX, ..LayerMesh::default() });
         }
-        for (slot, layer) in out.iter_mut().zip(self.layers.iter().rev()) {
+        for (slot, layer) in out.iter_mut().zip(&self.layers) {
             if slot.name != layer.name {
                 slot.name.clone_from(&layer.name);
             }
@@ -102,7 +102,7 @@ impl Tissue {
         }
     }
 
-    /// Connected components of the graph of intact links within one layer (lattice order), for tests
+    /// Connected components of the graph of intact links within one layer (0 is the upper), for tests
     /// and reports: a cut straight across a sheet leaves two.
     pub fn layer_components(&self, layer: usize) -> usize {
         let Some(l) = self.layers.get(layer) else { return 0 };

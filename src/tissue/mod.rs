@@ -60,7 +60,7 @@ impl Geometry {
 /// What a link is part of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LinkKind {
-    /// A link within layer `n` (lattice order: 0 is the lowest).
+    /// A link within layer `n` (0 is the upper layer, as in [`Tissue::layers`]).
     Layer(u8),
     /// A connective fibre between the layers.
     Connective,
@@ -185,7 +185,8 @@ impl Tissue {
         self.geometry
     }
 
-    /// Layers in lattice order (the lowest first).
+    /// The layers, upper (outer) first, as scenes list them and snapshots show them. (In the lattice
+    /// the lower layer's elements come first: `first` says where each layer's run starts.)
     pub fn layers(&self) -> &[Layer] {
         &self.layers
     }
@@ -240,7 +241,7 @@ impl Tissue {
         self.body.positions().get(e.index()).map(|&p| self.geometry.to_world(p))
     }
 
-    /// Which layer an element belongs to (lattice order).
+    /// Which layer an element belongs to (0 is the upper layer).
     pub fn layer_of(&self, e: ElementId) -> Option<usize> {
         self.layers.iter().position(|l| e.0 >= l.first && e.0 < l.first + l.count)
     }
@@ -251,16 +252,17 @@ impl Tissue {
             return None;
         }
         match self.layer_of(e)? {
-            0 => Some(ElementId(e.0 + self.sheet)),
-            _ => Some(ElementId(e.0 - self.sheet)),
+            0 => Some(ElementId(e.0 - self.sheet)),
+            _ => Some(ElementId(e.0 + self.sheet)),
         }
     }
 
-    /// The element on the surface nearest to a world point, optionally within one layer (lattice
-    /// order). Elements inside a volume are out of an instrument's reach.
+    /// The element on the surface nearest to a world point, optionally within one layer (0 is the
+    /// upper layer). Elements inside a volume are out of an instrument's reach.
     pub fn nearest_element(&self, p: [f32; 3], layer: Option<usize>) -> Option<ElementId> {
         let mut best: Option<(f32, u32)> = None;
-        for (li, l) in self.layers.iter().enumerate() {
+        // In element order (the lower layer first), so that ties go to the lower id.
+        for (li, l) in self.layers.iter().enumerate().rev() {
             if layer.is_some_and(|x| x != li) {
                 continue;
             }
@@ -406,8 +408,7 @@ impl Tissue {
     /// The probe: a ball of `radius` at world point `tip` pushes the surface of the outermost layer
     /// (layered) or the top of a volume where it meets it. Returns the elements moved.
     pub fn push(&mut self, tip: [f32; 3], radius: f32) -> u32 {
-        let top = self.layers.len().saturating_sub(1);
-        let Some(e) = self.nearest_element(tip, Some(top)) else { return 0 };
+        let Some(e) = self.nearest_element(tip, Some(0)) else { return 0 };
         let Ok(p) = self.body.position(e) else { return 0 };
         let t = self.geometry.to_lattice(tip, p[0]);
         let (axis, pass) = match self.geometry {

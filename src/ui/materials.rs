@@ -12,7 +12,7 @@ pub struct MaterialPanel;
 pub fn named_materials(frame: &Frame<'_>) -> Vec<(String, MaterialId)> {
     let tissue = frame.world.tissue();
     let mut out: Vec<(String, MaterialId)> =
-        tissue.layers().iter().rev().map(|l| (l.name.clone(), l.material)).collect();
+        tissue.layers().iter().map(|l| (l.name.clone(), l.material)).collect();
     for k in 0..tissue.body().materials().len() {
         let id = MaterialId(k as u16);
         if !out.iter().any(|(_, m)| *m == id) {

@@ -1,4 +1,9 @@
-//! What the renderer and the panels may see of the world: plain arrays, refilled in place each frame.
+//! The vocabulary every floor shares: what the renderer and the panels may see of the world (plain
+//! arrays, refilled in place each frame), which instrument is drawn and how it is held, a camera as
+//! the scene gives it.
+//!
+//! A leaf: imports nothing of this crate, so tissue, instrument, simulation and render all import it
+//! downward. Must not import wgpu, winit or egui.
 
 use serde::{Deserialize, Serialize};
 
