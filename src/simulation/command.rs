@@ -96,11 +96,13 @@ mod tests {
     #[test]
     fn serializes_flat_as_recordings_write_it() {
         let c: Command = InstrumentCommand::Select(InstrumentKind::Forceps).into();
-        assert_eq!(ron::to_string(&c).unwrap(), "Select(Forceps)");
-        assert_eq!(ron::from_str::<Command>("Select(Forceps)").unwrap(), c);
+        let write = |c: &Command| ron::to_string(c).expect("written");
+        let read = |s: &str| ron::from_str::<Command>(s).expect("read");
+        assert_eq!(write(&c), "Select(Forceps)");
+        assert_eq!(read("Select(Forceps)"), c);
         let c = Command::SetRelaxSweeps(7);
-        assert_eq!(ron::from_str::<Command>(&ron::to_string(&c).unwrap()).unwrap(), c);
+        assert_eq!(read(&write(&c)), c);
         let c: Command = InstrumentCommand::MoveTo([0.0, 0.01, 0.0]).into();
-        assert_eq!(ron::from_str::<Command>("MoveTo((0.0, 0.01, 0.0))").unwrap(), c);
+        assert_eq!(read("MoveTo((0.0, 0.01, 0.0))"), c);
     }
 }
