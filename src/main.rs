@@ -197,7 +197,7 @@ fn run_headless(
             return Ok(ExitCode::FAILURE);
         }
     };
-    let mut recorder = match record {
+    let recorder = match record {
         Some(path) => {
             let source = std::fs::read_to_string(scene_path).unwrap_or_default();
             match dissect::scene::Recorder::create(path, &scene_path.display().to_string(), &source) {
@@ -210,16 +210,17 @@ fn run_headless(
         }
         None => None,
     };
-    let result = runner::run(
+    let mut result = runner::run(
         &scene,
         &scene_path.display().to_string(),
         &script,
         &script_path.display().to_string(),
         steps,
-        recorder.as_mut(),
+        recorder,
     )
     .and_then(|output| runner::write_outputs(out, &output).map(|()| output));
-    if let (Some(r), Ok(output)) = (recorder, &result)
+    if let Ok(output) = &mut result
+        && let Some(r) = output.recorder.take()
         && let Err(e) = r.finish(output.world.step_count())
     {
         eprintln!("cannot finish the recording: {e}");

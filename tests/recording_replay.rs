@@ -25,9 +25,9 @@ fn a_recording_replays_bit_for_bit() {
     let script = Script::load(root().join("scenes/scripts/meninges_careful.ron")).expect("script");
     let path = tmp("careful.ron");
     let source = std::fs::read_to_string(&scene_path).expect("scene text");
-    let mut recorder = Recorder::create(&path, "scenes/meninges.ron", &source).expect("recorder");
-    let live = runner::run(&scene, "scene", &script, "script", None, Some(&mut recorder)).expect("live run");
-    recorder.finish(live.world.step_count()).expect("finish");
+    let recorder = Recorder::create(&path, "scenes/meninges.ron", &source).expect("recorder");
+    let mut live = runner::run(&scene, "scene", &script, "script", None, Some(recorder)).expect("live run");
+    live.recorder.take().expect("recorder back").finish(live.world.step_count()).expect("finish");
 
     let recording = Recording::load(&path).expect("recording loads");
     let replay_scene = Scene::from_str(&recording.scene_source, "recorded scene").expect("recorded scene");

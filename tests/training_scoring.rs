@@ -3,7 +3,7 @@
 
 mod common;
 
-use dissect::runner::Player;
+use dissect::runner::{Episode, Player, Source};
 use dissect::scene::{Action, Point};
 use dissect::simulation::{InstrumentKind, World, WorldConfig};
 use dissect::tissue::CutDepth;
@@ -20,18 +20,12 @@ fn goals() -> Goals {
 }
 
 fn play(actions: Vec<Action>) -> dissect::training::Assessment {
-    let tissue = common::plane(25);
-    let mut assessor = Assessor::new(goals(), &tissue, 1000.0);
-    let mut world = World::new(tissue, WorldConfig::default());
-    let mut player = Player::new(actions);
-    let mut steps = 0;
-    while !player.finished() && steps < 20_000 {
-        player.feed(&mut world);
-        world.step();
-        assessor.observe(&world);
-        steps += 1;
-    }
-    assessor.assessment(&world)
+    let world = World::new(common::plane(25), WorldConfig::default());
+    let assessor = Assessor::new(goals(), &world);
+    let mut episode = Episode::new(world, Some(assessor), Source::Script(Player::new(actions)));
+    while episode.world().step_count() < 20_000 && episode.step().is_some() {}
+    let assessor = episode.assessor().expect("assessor");
+    assessor.assessment(episode.world())
 }
 
 fn strokes(depth: CutDepth, v0: f32, v1: f32, u0: f32, u1: f32, h: f32) -> Vec<Action> {

@@ -144,8 +144,8 @@ impl App {
                     "dissect: {} frames in {seconds:.1} s ({:.1} fps), {} steps ({:.0} steps/s)",
                     state.frames,
                     state.frames as f64 / seconds.max(1e-9),
-                    self.session.world.step_count(),
-                    self.session.world.step_count() as f64 / seconds.max(1e-9)
+                    self.session.world().step_count(),
+                    self.session.world().step_count() as f64 / seconds.max(1e-9)
                 );
             }
             self.session.finish();
@@ -206,8 +206,8 @@ impl App {
             None => None,
         };
         let mut hand = Hand::default();
-        hand.tool.kind = self.session.world.instrument().kind;
-        hand.tool.depth = self.session.world.instrument().depth;
+        hand.tool.kind = self.session.world().instrument().kind;
+        hand.tool.depth = self.session.world().instrument().depth;
         Ok(State {
             gpu,
             renderer,
@@ -237,7 +237,7 @@ impl App {
         if session.poll_reload() {
             let mut dropped = Vec::new();
             state.hand.release(true, &mut dropped);
-            state.hand.tool.kind = session.world.instrument().kind;
+            state.hand.tool.kind = session.world().instrument().kind;
         }
         // A held stroke follows the cursor every frame (also when only the camera or insert changed).
         if state.hand.busy() && session.input_enabled() {
@@ -250,7 +250,7 @@ impl App {
         let assessment = session.assessment();
         let status = session.status();
         let frame = Frame {
-            world: &session.world,
+            world: session.world(),
             scene: &session.scene,
             tool: &state.hand.tool,
             timing: &session.timing,
@@ -309,7 +309,7 @@ impl App {
         }
         if !state.replay_done && session.replay_finished() {
             state.replay_done = true;
-            println!("dissect: replay finished at step {}", session.world.step_count());
+            println!("dissect: replay finished at step {}", session.world().step_count());
         }
         if self.options.frames.is_some_and(|n| state.frames >= n) {
             event_loop.exit();
@@ -351,9 +351,9 @@ fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let (ray, hit) = input::pick(&session.picker, &session.snapshot, &camera, &pointer);
     let mut out = Vec::new();
     if press {
-        state.hand.press(&session.world, &camera, ray, hit, &mut out);
+        state.hand.press(session.world(), &camera, ray, hit, &mut out);
     } else {
-        state.hand.drag(&session.world, ray, hit, &mut out);
+        state.hand.drag(session.world(), ray, hit, &mut out);
     }
     for c in out {
         session.queue(c);
@@ -386,14 +386,16 @@ fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action:
         Action::SetSweeps(n) if live => session.set_sweeps(n),
         Action::Reload if live && session.reload() => {
             state.hand.release(true, &mut Vec::new());
-            state.hand.tool.kind = session.world.instrument().kind;
+            state.hand.tool.kind = session.world().instrument().kind;
         }
         Action::Report => match session.write_report() {
             Some(summary) => {
                 state.trainee_ui.report.summary = Some(summary);
                 state.trainee_ui.report.open = true;
             }
-            None if session.assessor.is_none() => session.say("this scene sets no goals: nothing to report"),
+            None if session.assessor().is_none() => {
+                session.say("this scene sets no goals: nothing to report")
+            }
             None => {}
         },
         Action::Screenshot => screenshot(state, session, options),

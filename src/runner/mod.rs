@@ -1,10 +1,13 @@
-//! Running a script against a world, headless and deterministically: the player that turns timed
-//! actions into per-step instrument commands, and the figures a run reports.
+//! Running a world: the [`Episode`] every driver steps (a world, its assessment, its recording, and a
+//! command source), the script player that turns timed actions into per-step commands, and the
+//! figures and final state of a headless, deterministic run.
 //!
 //! Must not import wgpu, winit or egui (pictures are drawn by the caller through `render`).
 
+mod episode;
 mod player;
 
+pub use episode::{Advance, Episode, Source};
 pub use player::{Player, resolve};
 
 use serde::Serialize;
@@ -214,52 +217,44 @@ pub struct RunOutput {
     pub metrics: Metrics,
     /// The assessment, when the scene has goals.
     pub assessor: Option<crate::training::Assessor>,
+    /// The recording of the run's commands, when one was asked for (to be finished by the caller).
+    pub recorder: Option<crate::scene::Recorder>,
 }
 
 /// Runs `script` on `scene` without a window: `steps` steps, or until the script ends. Deterministic:
-/// no time budget is used, so the same inputs give the same state bit for bit. With a `recorder`, the
-/// commands given to the world are recorded as they go (a recording replays to the same state).
+/// no time budget is used, so the same inputs give the same state bit for bit. With a `recording`,
+/// the commands given to the world are recorded as they go (a recording replays to the same state);
+/// it comes back in the output, to be finished.
 pub fn run(
     scene: &crate::scene::Scene,
     scene_path: &str,
     script: &crate::scene::Script,
     script_path: &str,
     steps: Option<u64>,
-    mut recording: Option<&mut crate::scene::Recorder>,
+    recording: Option<crate::scene::Recorder>,
 ) -> Result<RunOutput, RunError> {
     script.check_against(scene).map_err(|reason| RunError::Script { path: script_path.into(), reason })?;
-    let mut world =
+    let world =
         scene.build_world(false).map_err(|source| RunError::Tissue { path: scene_path.into(), source })?;
-    let mut assessor = scene
-        .goals
-        .clone()
-        .map(|g| crate::training::Assessor::new(g, world.tissue(), scene.simulation.rate_hz as f64));
-    let mut player = Player::new(script.0.clone());
-    let limit = steps.unwrap_or(u64::MAX);
-    let mut recorder =
-        MetricsRecorder::with_capacity(steps.unwrap_or(script.duration_steps()).min(10_000_000) as usize);
-    while world.step_count() < limit {
-        player.feed(&mut world);
-        if steps.is_none() && player.finished() && world.pending().is_empty() {
-            break;
-        }
-        if let Some(r) = recording.as_deref_mut() {
-            for c in world.pending() {
-                r.record(world.step_count(), c).map_err(|e| RunError::Write {
-                    path: r.path().display().to_string(),
-                    reason: e.to_string(),
-                })?;
-            }
-        }
-        world.step();
-        recorder.observe(&world);
-        if let Some(a) = &mut assessor {
-            a.observe(&world);
-        }
+    let assessor = scene.goals.clone().map(|g| crate::training::Assessor::new(g, &world));
+    let mut episode = Episode::new(world, assessor, Source::Script(Player::new(script.0.clone())));
+    if let Some(r) = recording {
+        episode.record_to(r);
     }
-    let mut metrics = recorder.metrics(&world);
+    episode.run_past_end(steps.is_some());
+    let limit = steps.unwrap_or(u64::MAX);
+    let mut figures =
+        MetricsRecorder::with_capacity(steps.unwrap_or(script.duration_steps()).min(10_000_000) as usize);
+    while episode.world().step_count() < limit && episode.step().is_some() {
+        if let Some((path, reason)) = episode.take_record_error() {
+            return Err(RunError::Write { path, reason });
+        }
+        figures.observe(episode.world());
+    }
+    let (world, assessor, recorder) = episode.into_parts();
+    let mut metrics = figures.metrics(&world);
     metrics.assessment = assessor.as_ref().map(|a| a.assessment(&world));
-    Ok(RunOutput { world, metrics, assessor })
+    Ok(RunOutput { world, metrics, assessor, recorder })
 }
 
 /// Writes `metrics.json`, `state.json` and, with goals, `report.json` and `report.png` into `dir`.

@@ -35,7 +35,6 @@ impl Scene {
                         density: f.density,
                         damping: f.damping,
                         dynamic: f.mode == FemMode::Dynamic,
-                        dt: self.simulation.step_seconds() as f32,
                     }),
                 },
             })),
@@ -54,12 +53,12 @@ impl Scene {
                 max_time: interactive.then(|| s.relax_budget()),
                 tolerance: 0.0,
             },
+            ..WorldConfig::default()
         }
     }
 
     /// Builds the world the scene describes.
     pub fn build_world(&self, interactive: bool) -> Result<World, TissueError> {
-        let tissue = crate::tissue::Tissue::build(&self.tissue_spec()?)?;
-        Ok(World::new(tissue, self.world_config(interactive)))
+        World::build(&self.tissue_spec()?, self.world_config(interactive))
     }
 }

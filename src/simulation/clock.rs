@@ -1,5 +1,6 @@
 //! The fixed-step clock: real time accumulates, the simulation consumes it in fixed steps, a frame's
-//! catch-up is capped so that a slow machine falls behind instead of freezing.
+//! catch-up is capped so that a slow machine falls behind instead of freezing. The clock reads no time
+//! itself (its owner, the world, is handed elapsed time), so it runs alike on native and in a browser.
 
 use std::time::Duration;
 

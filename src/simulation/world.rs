@@ -1,14 +1,16 @@
-//! The world: a tissue and an instrument, advanced one fixed step at a time in named, ordered phases.
+//! The world: a tissue and an instrument, advanced one fixed step at a time in named, ordered phases,
+//! on a clock of its own.
 
-use std::time::Instant;
+use std::time::Duration;
 
 use serde::Serialize;
+use web_time::Instant;
 
-use super::Command;
+use super::{Command, FixedClock};
 use crate::chainmail::{ElementId, RelaxBudget};
 use crate::instrument::{Command as InstrumentCommand, GRASP_REACH, Hit, Instrument, PROBE_RADIUS};
 use crate::snapshot::{InstrumentKind, Snapshot};
-use crate::tissue::{CutSegment, Tissue};
+use crate::tissue::{CutSegment, Tissue, TissueError, TissueSpec};
 
 /// The phases of a step, in the order they run.
 pub const PHASES: [&str; 6] =
@@ -17,15 +19,31 @@ pub const PHASES: [&str; 6] =
 /// Settings of the step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WorldConfig {
-    /// Steps per second.
+    /// Steps per second: the one place the step length is set (the clock, a dynamic finite-element
+    /// model and the assessment read it from the world). Default 1000.
     pub rate_hz: f64,
     /// Relaxation per step. Deterministic runs give sweeps only, no time limit.
     pub relax: RelaxBudget,
+    /// Most steps one [`World::due_steps`] hands out: real time beyond that is dropped (the simulation
+    /// falls behind instead of freezing its caller). Default 100.
+    pub max_steps_per_advance: u32,
 }
 
 impl Default for WorldConfig {
     fn default() -> Self {
-        Self { rate_hz: 1000.0, relax: RelaxBudget::sweeps(4) }
+        Self { rate_hz: 1000.0, relax: RelaxBudget::sweeps(4), max_steps_per_advance: 100 }
+    }
+}
+
+impl WorldConfig {
+    /// Length of one step, seconds (1 ms if the rate is not a positive number).
+    pub fn step_seconds(&self) -> f64 {
+        let rate = if self.rate_hz.is_finite() && self.rate_hz > 0.0 { self.rate_hz } else { 1000.0 };
+        1.0 / rate
+    }
+
+    fn clock(&self) -> FixedClock {
+        FixedClock::new(self.rate_hz, self.max_steps_per_advance)
     }
 }
 
@@ -64,6 +82,7 @@ pub struct World {
     tissue: Tissue,
     instrument: Instrument,
     config: WorldConfig,
+    clock: FixedClock,
     commands: Vec<Command>,
     step: u64,
     last: StepCounters,
@@ -80,12 +99,20 @@ impl World {
         Self {
             tissue,
             instrument: Instrument::default(),
+            clock: config.clock(),
             config,
             commands: Vec::with_capacity(64),
             step: 0,
             last: StepCounters::default(),
             elements_moved_total: 0,
         }
+    }
+
+    /// Builds the tissue `spec` describes and a world around it, stepped as `config` says (a dynamic
+    /// finite-element model integrates over the world's step).
+    pub fn build(spec: &TissueSpec, config: WorldConfig) -> Result<Self, TissueError> {
+        let tissue = Tissue::build_stepped(spec, config.step_seconds() as f32)?;
+        Ok(Self::new(tissue, config))
     }
 
     /// The tissue.
@@ -108,14 +135,55 @@ impl World {
         &self.config
     }
 
-    /// Changes the settings (relaxation budget, rate).
+    /// Changes the settings (relaxation budget, rate; a new rate restarts the clock).
     pub fn set_config(&mut self, config: WorldConfig) {
+        if (config.rate_hz, config.max_steps_per_advance)
+            != (self.config.rate_hz, self.config.max_steps_per_advance)
+        {
+            self.clock = config.clock();
+        }
         self.config = config;
     }
 
     /// Steps run so far.
     pub fn step_count(&self) -> u64 {
         self.step
+    }
+
+    /// Length of one step, seconds.
+    pub fn step_seconds(&self) -> f64 {
+        self.config.step_seconds()
+    }
+
+    /// Simulated time so far, seconds.
+    pub fn time_seconds(&self) -> f64 {
+        self.step as f64 * self.step_seconds()
+    }
+
+    /// Adds `elapsed` real time to the world's clock; returns how many steps are due now (at most
+    /// [`WorldConfig::max_steps_per_advance`]). For callers that do something between steps (an
+    /// episode feeds and assesses each); [`World::advance`] runs them itself.
+    pub fn due_steps(&mut self, elapsed: Duration) -> u32 {
+        self.clock.advance(elapsed)
+    }
+
+    /// Advances the world by `elapsed` real time: runs the steps due; returns how many ran.
+    pub fn advance(&mut self, elapsed: Duration) -> u32 {
+        let due = self.due_steps(elapsed);
+        for _ in 0..due {
+            self.step();
+        }
+        due
+    }
+
+    /// Whether the last [`World::due_steps`] had to drop time (the simulation is slower than real time).
+    pub fn is_behind(&self) -> bool {
+        self.clock.is_behind()
+    }
+
+    /// How far real time has gone into the next step, in `[0, 1)`, for interpolation.
+    pub fn step_alpha(&self) -> f32 {
+        self.clock.alpha()
     }
 
     /// What the last step did.

@@ -76,11 +76,18 @@ pub enum TissueSpec {
 }
 
 impl Tissue {
-    /// Builds a tissue. Nothing is half-built: any error leaves no tissue.
+    /// Builds a tissue to be stepped at the default 1000 steps per second. Nothing is half-built: any
+    /// error leaves no tissue.
     pub fn build(spec: &TissueSpec) -> Result<Self, TissueError> {
+        Self::build_stepped(spec, 1e-3)
+    }
+
+    /// Builds a tissue to be stepped every `step_seconds` (what a dynamic finite-element model
+    /// integrates over; the world passes its own step, see `World::build`).
+    pub fn build_stepped(spec: &TissueSpec, step_seconds: f32) -> Result<Self, TissueError> {
         match spec {
             TissueSpec::Layered(s) => build_layered(s),
-            TissueSpec::Volume(s) => build_volume(s),
+            TissueSpec::Volume(s) => build_volume(s, step_seconds),
         }
     }
 }
@@ -352,7 +359,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
     ))
 }
 
-fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
+fn build_volume(s: &VolumeSpec, step_seconds: f32) -> Result<Tissue, TissueError> {
     for (k, &x) in s.size.iter().enumerate() {
         if !(x.is_finite() && x > 0.0) {
             return Err(invalid(&format!("size[{k}]"), format!("{x}: expected a positive number of metres")));
@@ -456,7 +463,7 @@ fn build_volume(s: &VolumeSpec) -> Result<Tissue, TissueError> {
                 ));
             }
             let mut last = -1.0f32;
-            let drive = super::FemDrive::load(dims, h[0], f, |p| {
+            let drive = super::FemDrive::load(dims, h[0], f, step_seconds, |p| {
                 if p >= last + 0.25 || p >= 1.0 {
                     log::info!("finite-element model: {:.0}% precomputed", 100.0 * p);
                     last = p;

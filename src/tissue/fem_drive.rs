@@ -23,10 +23,9 @@ pub struct FemSpec {
     pub density: f32,
     /// Mass-proportional damping, 1/s (dynamic mode).
     pub damping: f32,
-    /// Integrate in time (mass and damping) instead of solving for equilibrium every step.
+    /// Integrate in time (mass and damping) over the world's step instead of solving for equilibrium
+    /// every step.
     pub dynamic: bool,
-    /// Simulation step, seconds (dynamic mode).
-    pub dt: f32,
 }
 
 /// The model and its current surface displacement.
@@ -39,12 +38,13 @@ pub struct FemDrive {
 }
 
 impl FemDrive {
-    /// Loads the model for a block of `dims` nodes at `spacing` metres, base clamped. Reports progress
-    /// in `[0, 1]` to `progress`.
+    /// Loads the model for a block of `dims` nodes at `spacing` metres, base clamped, stepped every
+    /// `step_seconds` (dynamic mode). Reports progress in `[0, 1]` to `progress`.
     pub fn load(
         dims: [usize; 3],
         spacing: f32,
         spec: &FemSpec,
+        step_seconds: f32,
         progress: impl FnMut(f32),
     ) -> Result<Self, FemError> {
         let mesh = TetMesh::block(dims, spacing as f64, Split::Six)?;
@@ -59,7 +59,7 @@ impl FemDrive {
         let dynamic = if spec.dynamic {
             Some(DynamicModel::new(
                 &model,
-                DynamicParams { dt: spec.dt as f64, damping: spec.damping as f64 },
+                DynamicParams { dt: step_seconds as f64, damping: spec.damping as f64 },
                 &options,
             )?)
         } else {

@@ -178,8 +178,9 @@ pub struct Assessor {
 }
 
 impl Assessor {
-    /// An assessor for `goals` on `tissue`, stepping at `rate_hz`.
-    pub fn new(goals: Goals, tissue: &Tissue, rate_hz: f64) -> Self {
+    /// An assessor for `goals` on `world`'s tissue, reading time from the world's step length.
+    pub fn new(goals: Goals, world: &World) -> Self {
+        let tissue = world.tissue();
         let rest = tissue.body().lattice().rest_positions();
         let (mut target, mut outside, mut forbidden, mut target_pairs) = (vec![], vec![], vec![], vec![]);
         let mut rest_gap = 0.0;
@@ -202,10 +203,9 @@ impl Assessor {
                 }
             }
         }
-        let rate = if rate_hz.is_finite() && rate_hz > 0.0 { rate_hz } else { 1000.0 };
         Self {
             goals,
-            dt: (1.0 / rate) as f32,
+            dt: world.step_seconds() as f32,
             target,
             target_pairs,
             outside,
