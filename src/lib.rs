@@ -13,7 +13,7 @@
 //!
 //! | module | owns | may import |
 //! |---|---|---|
-//! | [`chainmail`] | lattices, materials, the chain reaction, relaxation, broken links, grid fast paths | std, serde, thiserror, pulp |
+//! | [`chainmail`] | lattices, materials, the chain reaction, relaxation, broken links, grid fast paths | std, serde, thiserror, pulp, rayon, log |
 //! | [`surface`] | parametric surfaces X(u, v) and the (u, v, h) mapping | chainmail |
 //! | [`tissue`] | layers, connective fibres, pins, grasp and push, contact, cuts, tears, meshes | chainmail, surface |
 //! | [`fem`] | the linear elastic tetrahedral reference model (condensation, SMVM) and its comparison with ChainMail | std, serde, thiserror, faer, nalgebra, chainmail |

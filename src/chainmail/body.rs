@@ -2,11 +2,11 @@
 
 use std::collections::HashMap;
 
-use super::error::ChainMailError;
+use super::coords::{norm, sub};
+use super::error::{ChainMailError, finite};
 use super::ids::{ElementId, LinkId, MaterialId};
-use super::lattice::{Lattice, norm, sub};
+use super::lattice::Lattice;
 use super::material::Material;
-use super::stencil::Stencil;
 
 /// Element flag: pinned by the scene (held by surrounding anatomy); never moved.
 pub(crate) const PINNED: u8 = 1;
@@ -58,9 +58,19 @@ pub struct Body {
     pub(crate) classes: Vec<SlotClass>,
     /// Where each class sits in `classes`, by its bits.
     class_index: HashMap<[u32; 8], u32>,
-    /// The grid fast path of relaxation, for grid lattices; marked stale by any change of pins,
-    /// holds, cuts or materials.
-    pub(crate) stencil: Option<Stencil>,
+    /// Which lattice this body was built on: a number no other body's lattice has (clones share it).
+    /// A workspace keeps tables of the lattice it last served under this number.
+    pub(crate) shape: u64,
+    /// Which pins, holds, cuts and materials the body has: a new number on each change, shared only
+    /// by clones with the same ones. A workspace's grid tables are rebuilt when it changes.
+    pub(crate) revision: u64,
+}
+
+/// A number no earlier call returned (for [`Body::shape`] and [`Body::revision`]).
+fn fresh_number() -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(1);
+    NEXT.fetch_add(1, Ordering::Relaxed)
 }
 
 /// What a slot's link demands, as seen from the slot's owner.
@@ -122,20 +132,19 @@ impl Body {
             link_box: vec![[[0.0; 3]; 2]; m],
             link_state: vec![INTACT; m],
             lattice,
-            stencil: None,
+            shape: fresh_number(),
+            revision: 0,
         };
         for l in 0..m {
             body.update_link_box(l);
         }
-        body.stencil = Stencil::for_body(&body);
+        body.touch();
         Ok(body)
     }
 
-    /// Marks the stencil stale: pins, holds, cuts or materials changed.
+    /// Gives the body a new revision: pins, holds, cuts or materials changed.
     fn touch(&mut self) {
-        if let Some(s) = &mut self.stencil {
-            s.fresh = false;
-        }
+        self.revision = fresh_number();
     }
 
     fn update_link_box(&mut self, l: usize) {
@@ -251,7 +260,7 @@ impl Body {
     pub fn set_position(&mut self, e: ElementId, p: [f32; 3]) -> Result<(), ChainMailError> {
         self.check_element(e)?;
         for &x in &p {
-            super::error::finite("position", x)?;
+            finite("position", x)?;
         }
         self.pos[e.index()] = p;
         Ok(())

@@ -1,6 +1,7 @@
 //! The lattice: elements at rest positions and the links between them. Immutable once built: cutting
 //! marks links broken in the [`Body`](super::Body), it does not change the lattice.
 
+use super::coords::{norm, sub};
 use super::error::{ChainMailError, finite};
 use super::ids::{ElementId, LinkId};
 
@@ -383,16 +384,6 @@ impl Lattice {
         };
         (s..t).map(|k| (ElementId(self.adj_nbr[k]), LinkId(self.adj_link[k] & !SIDE_B)))
     }
-}
-
-#[inline]
-pub(crate) fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-#[inline]
-pub(crate) fn norm(a: [f32; 3]) -> f32 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
 #[cfg(test)]

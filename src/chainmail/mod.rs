@@ -26,22 +26,44 @@
 //! regular elements a SIMD vector at a time; they agree with the generic path to the rounding of the
 //! coordinates (regular elements take a uniform grid's rest offsets as cancelling). Both are checked
 //! against the generic path in `tests/chainmail_reference.rs`; anything irregular (borders, seams,
-//! cuts, pins, other materials) takes the generic path.
+//! cuts, pins, other materials) takes the generic path. The SIMD level is the CPU's widest unless
+//! `DISSECT_SIMD` (`avx2`, `scalar`) caps it or [`Workspace::set_simd`] does ([`SimdLevel`]).
+//!
+//! ## Files, by dependency
+//! Each file imports only files above it (and `ids`, `error`, `coords`, `simd`, `schedule`, the
+//! leaves):
+//!
+//! | file | owns |
+//! |---|---|
+//! | `ids`, `error`, `material`, `coords` | typed ids, errors, materials, coordinate arithmetic and the one scalar clamp |
+//! | `simd`, `schedule` | the SIMD level and its dispatch; running two halves of a sweep on two threads |
+//! | `lattice` | elements, links, rest shape, adjacency (immutable) |
+//! | `body` | positions, pins, materials, broken links, the slot classes both loops read |
+//! | `stencil` | what the fast paths know of a grid body: neighbour offsets, regular elements, row boxes |
+//! | `workspace` | the loops' scratch, the stencil of the body it serves, the SIMD level |
+//! | `reaction/` | the chain reaction: API and one-by-one loop (`mod`), shared arrays and checks (`arrays`), runs across rows (`runs`) in portable (`chunk`) or AVX-512 (`avx512`) chunks |
+//! | `relax/` | relaxation: API and generic sweeps (`mod`), the plain kernel (`kernel`), the grid SIMD kernel (`grid`), the split into bands (`bands`) |
 
 mod body;
-mod deform;
+mod coords;
 mod error;
 mod ids;
 mod lattice;
 mod material;
+mod reaction;
 mod relax;
+mod schedule;
+mod simd;
 mod stencil;
+mod workspace;
 
 pub use body::{Body, BreakReason};
-pub use deform::{Deformation, Pass, Workspace};
 pub use error::ChainMailError;
 pub use ids::{ElementId, LinkId, MaterialId};
 pub(crate) use lattice::SIDE_B as SIDE_B_BIT;
 pub use lattice::{Axis, BYTES_PER_ELEMENT, GridSpec, Lattice, LinkSpec, MAX_ELEMENTS};
 pub use material::{Limits, Material};
+pub use reaction::{Deformation, Pass};
 pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};
+pub use simd::{SIMD_ENV, SimdLevel};
+pub use workspace::Workspace;

@@ -2,7 +2,7 @@
 //! `½ Σ k |(p_b - r_b) - (p_a - r_a)|²` sweep by sweep.
 //!
 //! Each sweep is a damped Jacobi update of the displacement field `u = p - rest`: every free element
-//! goes a fraction [`OMEGA`] of the way to the stiffness-weighted mean displacement of its intact
+//! goes a fraction ω (`OMEGA`, 0.9) of the way to the stiffness-weighted mean displacement of its intact
 //! neighbours, but no further than the ChainMail limits of its links allow (Gibson: relaxation adjusts
 //! positions *within* the constraints, so a taut fibre stays taut). For a graph Laplacian a Jacobi step
 //! scaled per coordinate by factors in `[0, 1]` never raises the energy when `OMEGA <= 1`; below 1 it
@@ -10,12 +10,14 @@
 
 use std::time::{Duration, Instant};
 
-use super::body::{Body, FIXED, SlotClass};
-use super::deform::Workspace;
+use super::body::{Body, FIXED};
 use super::ids::ElementId;
+use super::workspace::Workspace;
+use kernel::{max_change, relaxed_row};
 
-/// Jacobi damping factor.
-pub const OMEGA: f32 = 0.9;
+mod bands;
+mod grid;
+mod kernel;
 
 /// How much relaxation a call may do.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -94,43 +96,10 @@ impl Body {
         report
     }
 
-    /// The relaxed position of element `i`: where it is if pinned or held, else [`Body::relaxed_in`]
-    /// over the body's positions.
-    #[inline(always)]
-    pub(crate) fn relaxed_unless_fixed(&self, i: usize) -> [f32; 3] {
-        self.relaxed_in(i, |j| self.pos[j])
-    }
-
-    /// The relaxed position of element `i`, positions read through `pos_of` (a sweep working in place
-    /// reads its neighbours' old positions from where it keeps them). Pinned and held elements stay
-    /// where they are. A free one takes a damped Jacobi step toward the weighted mean displacement of
-    /// its neighbours, shortened per coordinate where it would leave the constraint boxes of its
-    /// intact links (the box of each link taken at the neighbour's current position). A step is only
-    /// ever shortened, never reversed, so the energy still cannot rise (each coordinate's step is the
-    /// Jacobi step scaled by a factor in `[0, 1]`, and `ω ≤ 1`).
-    #[inline(always)]
-    pub(crate) fn relaxed_in(&self, i: usize, pos_of: impl Fn(usize) -> [f32; 3]) -> [f32; 3] {
-        let p = pos_of(i);
-        if self.flags[i] & FIXED != 0 {
-            return p;
-        }
-        let (w, rest) = (self.width, &self.lattice.rest);
-        let row = i * w..(i + 1) * w;
-        relaxed_with(
-            pos_of,
-            p,
-            rest[i],
-            &self.slot_nbr[row.clone()],
-            &self.slot_class[row],
-            &self.classes,
-            |_, j| rest[j],
-        )
-    }
-
     fn sweep_all(&mut self, ws: &mut Workspace) -> f32 {
         // Grids take the stencil path: in place, in vectors, in bands on the pool's threads; the same
         // result up to rounding (regular elements skip the rest positions, whose offsets cancel).
-        if let Some(change) = self.sweep_stencil(&mut ws.next) {
+        if let Some(change) = self.sweep_grid(ws) {
             return change;
         }
         // Constant widths let the row loop unroll: 4 on sheets, 6 in volumes.
@@ -202,80 +171,4 @@ impl Body {
         }
         change
     }
-}
-
-/// `change` raised to the largest coordinate move from `p` to `q` (all finite).
-#[inline(always)]
-pub(crate) fn max_change(change: f32, p: [f32; 3], q: [f32; 3]) -> f32 {
-    let mut m = change;
-    for c in 0..3 {
-        let d = (q[c] - p[c]).abs();
-        m = if d > m { d } else { m };
-    }
-    m
-}
-
-/// The relaxed position of an element at `p` (rest `r`) whose adjacency row is `nbrs` and
-/// `slot_class` (boxes on `p[owner] - p[nbr]` and weights in `classes`). Broken links and padding
-/// slots have weight 0 and an infinite box: they add exactly nothing (the sums start at +0, so adding
-/// ±0 leaves them bit for bit).
-#[inline(always)]
-fn relaxed_row(
-    pos: &[[f32; 3]],
-    rest: &[[f32; 3]],
-    p: [f32; 3],
-    r: [f32; 3],
-    nbrs: &[u32],
-    classes: &[SlotClass],
-    slot_class: &[u32],
-) -> [f32; 3] {
-    let rest = &rest[..pos.len()];
-    relaxed_with(|j| pos[j], p, r, nbrs, slot_class, classes, |_, j| rest[j])
-}
-
-/// [`relaxed_row`] with the neighbours' positions given by `pos_of(neighbour)` and their rest
-/// positions by `rest_of(slot, neighbour)`.
-#[inline(always)]
-pub(crate) fn relaxed_with(
-    pos_of: impl Fn(usize) -> [f32; 3],
-    p: [f32; 3],
-    r: [f32; 3],
-    nbrs: &[u32],
-    slot_class: &[u32],
-    classes: &[SlotClass],
-    rest_of: impl Fn(usize, usize) -> [f32; 3],
-) -> [f32; 3] {
-    let mut acc = [0.0f32; 3];
-    let mut wsum = 0.0f32;
-    let mut lo = [f32::NEG_INFINITY; 3];
-    let mut hi = [f32::INFINITY; 3];
-    for (t, (&j, &class)) in nbrs.iter().zip(slot_class).enumerate() {
-        let SlotClass { bounds: [blo, bhi], w } = classes[class as usize];
-        let j = j as usize;
-        let (pj, rj) = (pos_of(j), rest_of(t, j));
-        for c in 0..3 {
-            acc[c] += w * (pj[c] - rj[c]);
-            // The slot bounds `p[i] - p[j]`: `p[i]` must lie in `[pj + blo, pj + bhi]`.
-            let (l, h) = (pj[c] + blo[c], pj[c] + bhi[c]);
-            lo[c] = if l > lo[c] { l } else { lo[c] };
-            hi[c] = if h < hi[c] { h } else { hi[c] };
-        }
-        wsum += w;
-    }
-    if wsum <= 0.0 {
-        return p;
-    }
-    let inv = OMEGA / wsum;
-    let mut q = p;
-    for c in 0..3 {
-        let target = p[c] + (acc[c] * inv - OMEGA * (p[c] - r[c]));
-        // Never leave the boxes further than the element already is; never step backwards.
-        let floor = if lo[c] < p[c] { lo[c] } else { p[c] };
-        let ceil = if hi[c] > p[c] { hi[c] } else { p[c] };
-        let t = if target > floor { target } else { floor };
-        let t = if t < ceil { t } else { ceil };
-        // No subnormal coordinates (see `stencil::FLUSH`).
-        q[c] = (t + super::stencil::FLUSH) - super::stencil::FLUSH;
-    }
-    q
 }

@@ -1,0 +1,40 @@
+//! Thread scheduling for the whole-body sweep: two halves of a sweep run at once, one on the calling
+//! thread and one on rayon's pool, with a short spin-wait instead of sleeping. Knows nothing of
+//! bodies: the relaxation's bands (`relax/bands.rs`) call it.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// How long the calling thread waits for the pool's half by spinning before it blocks.
+const SPIN: Duration = Duration::from_millis(2);
+
+/// Runs `here` on the calling thread and `there` on the thread pool, and returns both results.
+///
+/// `rayon::join` called from outside the pool hands both halves to the pool and puts the caller to
+/// sleep until they are done: on this project's virtual machines waking the sleeping threads costs
+/// tens of microseconds, as much as a quarter of a whole-body sweep. Here only one pool thread is
+/// woken, and the caller, once done with its own half, spins briefly rather than sleeping (and
+/// then blocks as usual, which also lets a pool thread calling this run the other half itself).
+pub(crate) fn here_and_there<A, B>(here: A, there: B) -> (f32, f32)
+where
+    A: FnOnce() -> f32,
+    B: FnOnce() -> f32 + Send,
+{
+    let done = AtomicBool::new(false);
+    let mut far = 0.0;
+    let near = rayon::in_place_scope(|s| {
+        s.spawn(|_| {
+            far = there();
+            done.store(true, Ordering::Release);
+        });
+        let near = here();
+        let start = Instant::now();
+        while !done.load(Ordering::Acquire) && start.elapsed() < SPIN {
+            for _ in 0..64 {
+                std::hint::spin_loop();
+            }
+        }
+        near
+    });
+    (near, far)
+}

@@ -1,0 +1,112 @@
+//! Scratch for the chain reaction and relaxation, sized once per body so that no step allocates,
+//! and the grid tables both loops read (rebuilt when the body's pins, holds, cuts or materials
+//! change). Never serialized.
+
+use super::body::Body;
+use super::ids::ElementId;
+use super::simd::SimdLevel;
+use super::stencil::Stencil;
+
+/// Scratch for deformations and relaxation. Sized once per body; no step allocates.
+#[derive(Clone, Debug, Default)]
+pub struct Workspace {
+    /// `stamp[i] == generation` when element `i` moved in the current deformation.
+    pub(crate) stamp: Vec<u32>,
+    pub(crate) generation: u32,
+    /// Position before the current deformation, valid where stamped.
+    pub(crate) old: Vec<[f32; 3]>,
+    /// The sponsor of each moved element (itself for the source), valid where stamped.
+    pub(crate) sponsor: Vec<u32>,
+    /// Elements moved by the current deformation, in the order they moved.
+    pub(crate) moved: Vec<u32>,
+    /// Gibson's candidate lists, one per adjacency slot (a direction on grids: x-, x+, y-, y+, z-,
+    /// z+): list `t` occupies `lists[t * n..(t + 1) * n]` and holds moved elements whose neighbour
+    /// through slot `t` is still to be checked. Each moved element enters each list once.
+    pub(crate) lists: Vec<u32>,
+    /// Heads and tails of the candidate lists for widths without a specialised path.
+    pub(crate) list_ends: Vec<usize>,
+    /// Relaxation's second buffer.
+    pub(crate) next: Vec<[f32; 3]>,
+    /// The grid tables of the body last fitted (`None` for other lattices), and the body's
+    /// [`Body::shape`] they were built for.
+    pub(crate) stencil: Option<Stencil>,
+    shape: u64,
+    /// The widest SIMD the loops use.
+    simd: SimdLevel,
+}
+
+impl Workspace {
+    /// A workspace sized for `body`, at the environment's SIMD level ([`SimdLevel::from_env`]).
+    pub fn new(body: &Body) -> Self {
+        let mut ws = Self::default();
+        ws.fit(body);
+        ws
+    }
+
+    /// Resizes for `body` if needed (allocates only when the body grew or is another body).
+    pub fn fit(&mut self, body: &Body) {
+        let n = body.element_count();
+        if self.stamp.len() != n {
+            self.stamp = vec![0; n];
+            self.generation = 0;
+            self.old = vec![[0.0; 3]; n];
+            self.sponsor = vec![0; n];
+            self.next = vec![[0.0; 3]; n];
+            self.moved = Vec::with_capacity(n);
+        }
+        if self.lists.len() != n * body.width {
+            self.lists = vec![0; n * body.width];
+        }
+        if self.shape != body.shape {
+            self.stencil = Stencil::for_body(body);
+            self.shape = body.shape;
+        }
+    }
+
+    /// The SIMD level the loops use with this workspace.
+    pub fn simd(&self) -> SimdLevel {
+        self.simd
+    }
+
+    /// Caps the SIMD level the loops use with this workspace (at what the CPU has): tests and
+    /// benches compare the levels with it.
+    pub fn set_simd(&mut self, level: SimdLevel) {
+        self.simd = level.supported();
+    }
+
+    /// Elements moved by the last deformation, in the order they moved (the source first).
+    pub fn moved(&self) -> impl ExactSizeIterator<Item = ElementId> + '_ {
+        self.moved.iter().map(|&i| ElementId(i))
+    }
+
+    /// The sponsor of an element moved by the last deformation (the source is its own sponsor).
+    pub fn sponsor(&self, e: ElementId) -> Option<ElementId> {
+        let i = e.index();
+        (self.stamp.get(i) == Some(&self.generation) && self.generation != 0)
+            .then(|| ElementId(self.sponsor[i]))
+    }
+
+    /// An element's position before the last deformation, if it moved.
+    pub fn old_position(&self, e: ElementId) -> Option<[f32; 3]> {
+        self.sponsor(e).map(|_| self.old[e.index()])
+    }
+
+    /// Starts a new deformation: a fresh stamp, an empty moved list.
+    pub(crate) fn next_generation(&mut self) {
+        if self.generation == u32::MAX {
+            self.stamp.fill(0);
+            self.generation = 0;
+        }
+        self.generation += 1;
+        self.moved.clear();
+    }
+
+    /// Puts the elements the current deformation moved back where they were.
+    pub(crate) fn rollback(&mut self, pos: &mut [[f32; 3]]) {
+        for &i in &self.moved {
+            pos[i as usize] = self.old[i as usize];
+        }
+        // Forget the moves: a fresh generation unstamps them.
+        self.next_generation();
+    }
+}
