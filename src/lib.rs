@@ -24,11 +24,13 @@
 //! | [`training`] | exercise goals, live assessment and score, session report and plot | tissue, simulation |
 //! | [`render`] | wgpu device, scene pipelines and buffers, orbit camera and picking rays, headless PNG capture | wgpu, glam, bytemuck, image, `simulation` (snapshot types only); never winit or egui |
 //! | [`ui`] | the egui panels, one type per panel (`View`), and the actions they ask for | egui, `World`'s public API, scene, training (types); never winit or wgpu |
+//! | `web` (wasm32 only) | the trainer in a browser: one canvas with both views, scenes from the page, downloads | winit (web), egui-winit, egui-wgpu, ui, render, `app`'s input logic, wasm-bindgen, web-sys |
 //! | [`app`] | the two windows, the event loop, input to instrument commands, recording and replay, hot reload | winit (only here), egui-winit, egui-wgpu, ui, render, and the simulation side's public API |
 //!
 //! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
 //! `training`, `fem`) never imports wgpu, winit or egui.
 
+#[cfg(not(target_arch = "wasm32"))]
 pub mod app;
 pub mod chainmail;
 pub mod fem;
@@ -42,3 +44,5 @@ pub mod surface;
 pub mod tissue;
 pub mod training;
 pub mod ui;
+#[cfg(target_arch = "wasm32")]
+pub mod web;

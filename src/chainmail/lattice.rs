@@ -99,7 +99,8 @@ fn check_count(count: u128) -> Result<usize, ChainMailError> {
         return Err(ChainMailError::TooManyElements {
             count,
             limit: MAX_ELEMENTS,
-            limit_mib: MAX_ELEMENTS * BYTES_PER_ELEMENT / (1 << 20),
+            // (MiB first: the product overflows a 32-bit usize, as on wasm32.)
+            limit_mib: MAX_ELEMENTS / (1 << 20) * BYTES_PER_ELEMENT,
         });
     }
     Ok(count as usize)

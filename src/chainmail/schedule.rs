@@ -3,7 +3,9 @@
 //! bodies: the relaxation's bands (`relax/bands.rs`) call it.
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 /// How long the calling thread waits for the pool's half by spinning before it blocks.
 const SPIN: Duration = Duration::from_millis(2);

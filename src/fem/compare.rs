@@ -20,7 +20,7 @@
 //! FEM step ≈ 2 µs.
 
 use std::fmt;
-use std::time::Instant;
+use web_time::Instant;
 
 use serde::{Deserialize, Serialize};
 

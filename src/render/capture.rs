@@ -2,9 +2,8 @@
 //! unpad it into an [`image::RgbaImage`]. Used by `dissect run --out DIR` and by the golden-image tests.
 
 use super::camera::OrbitCamera;
-use super::scene::{SceneRenderer, SceneView, Style};
+use super::scene::{SceneRenderer, SceneView};
 use super::{Gpu, RenderError};
-use crate::snapshot::Snapshot;
 
 /// Colour format of offscreen images: 8-bit sRGB RGBA, the bytes a PNG stores.
 pub const OFFSCREEN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -138,12 +137,12 @@ impl Offscreen {
 #[cfg(not(target_arch = "wasm32"))]
 pub fn render_to_image(
     gpu: &Gpu,
-    snapshot: &Snapshot,
+    snapshot: &crate::snapshot::Snapshot,
     camera: &OrbitCamera,
     width: u32,
     height: u32,
 ) -> Result<image::RgbaImage, RenderError> {
-    let mut renderer = SceneRenderer::new(gpu, OFFSCREEN_FORMAT, Style::default());
+    let mut renderer = SceneRenderer::new(gpu, OFFSCREEN_FORMAT, super::Style::default());
     renderer.update(gpu, snapshot)?;
     let offscreen = Offscreen::new(gpu, &renderer, width, height)?;
     offscreen.render(gpu, &renderer, camera);

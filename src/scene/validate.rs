@@ -87,7 +87,7 @@ fn color(at: &FieldPath, c: [f32; 4]) -> Result<(), Problem> {
 
 fn element_limit(at: &FieldPath, count: u128, what: String) -> Result<(), Problem> {
     if count > MAX_ELEMENTS as u128 {
-        let mib = (MAX_ELEMENTS * crate::chainmail::BYTES_PER_ELEMENT / (1 << 20)) as u128;
+        let mib = (MAX_ELEMENTS / (1 << 20) * crate::chainmail::BYTES_PER_ELEMENT) as u128;
         return problem(
             at,
             format!(

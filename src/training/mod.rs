@@ -6,7 +6,7 @@
 
 mod report;
 
-pub use report::{ReportError, write_plot, write_report};
+pub use report::{ReportError, report_json, write_plot, write_report};
 
 use serde::{Deserialize, Serialize};
 

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use plotters::prelude::*;
+#[cfg(not(target_arch = "wasm32"))]
 use plotters::style::{FontStyle, register_font};
 use thiserror::Error;
 
@@ -32,14 +33,19 @@ pub enum ReportError {
 
 /// Writes `report.json`: the assessment and its history.
 pub fn write_report(path: &Path, assessment: &Assessment, history: &[Sample]) -> Result<(), ReportError> {
+    let text = report_json(assessment, history)
+        .map_err(|e| ReportError::Plot { path: path.display().to_string(), reason: e.to_string() })?;
+    std::fs::write(path, text).map_err(|source| ReportError::Io { path: path.display().to_string(), source })
+}
+
+/// The text of `report.json` (the browser build offers it as a download).
+pub fn report_json(assessment: &Assessment, history: &[Sample]) -> Result<String, serde_json::Error> {
     #[derive(serde::Serialize)]
     struct Report<'a> {
         assessment: &'a Assessment,
         history: &'a [Sample],
     }
-    let text = serde_json::to_string_pretty(&Report { assessment, history })
-        .map_err(|e| ReportError::Plot { path: path.display().to_string(), reason: e.to_string() })?;
-    std::fs::write(path, text).map_err(|source| ReportError::Io { path: path.display().to_string(), source })
+    serde_json::to_string_pretty(&Report { assessment, history })
 }
 
 /// Draws stretch and completion over time into a PNG of 800 x 450 pixels.
@@ -51,6 +57,8 @@ pub fn write_plot(path: &Path, history: &[Sample], stretch_limit: f32) -> Result
         reason: e.to_string(),
     };
     // egui's bundled font, so that the plot has text on a machine without system fonts.
+    // (Natively only: plotters has no font registry on wasm, where the plot is not drawn.)
+    #[cfg(not(target_arch = "wasm32"))]
     let _ = register_font("sans-serif", FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT);
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();

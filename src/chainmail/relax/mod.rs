@@ -8,7 +8,9 @@
 //! scaled per coordinate by factors in `[0, 1]` never raises the energy when `OMEGA <= 1`; below 1 it
 //! also cannot stall in the checkerboard mode of a bipartite grid.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 use super::body::{Body, FIXED};
 use super::ids::ElementId;

@@ -1,0 +1,287 @@
+//! A session in the browser: the scene and its world, driven by the trainee (the commands kept in
+//! memory as a recording to download) or by a bundled script (played exactly as `dissect run` plays it,
+//! so that the figures match the native run's).
+
+use std::time::Duration;
+
+use web_time::Instant;
+
+use crate::instrument::{Command, Picker};
+use crate::runner::{MetricsRecorder, Player};
+use crate::scene::{Action as ScriptAction, Recording, Scene, Script};
+use crate::simulation::{FixedClock, Snapshot, World};
+use crate::training::Assessor;
+use crate::ui::{FrameSample, Timing};
+
+/// The bundled scenes, by name (the default first).
+pub const SCENES: &[(&str, &str)] = &[
+    ("meninges", crate::scene::DEFAULT_SCENE),
+    ("cylinder", include_str!("../../scenes/cylinder.ron")),
+    ("sphere", include_str!("../../scenes/sphere.ron")),
+    ("volume", include_str!("../../scenes/volume.ron")),
+    ("fem_block", include_str!("../../scenes/fem_block.ron")),
+];
+
+/// The bundled scripts, by name.
+pub const SCRIPTS: &[(&str, &str)] = &[
+    ("meninges", include_str!("../../scenes/scripts/meninges.ron")),
+    ("meninges_careful", include_str!("../../scenes/scripts/meninges_careful.ron")),
+    ("meninges_careless", include_str!("../../scenes/scripts/meninges_careless.ron")),
+    ("cylinder", include_str!("../../scenes/scripts/cylinder.ron")),
+    ("sphere", include_str!("../../scenes/scripts/sphere.ron")),
+    ("volume", include_str!("../../scenes/scripts/volume.ron")),
+    ("fem_block", include_str!("../../scenes/scripts/fem_block.ron")),
+];
+
+/// Most steps one frame may run (a slow frame falls behind rather than freezing the page).
+const MAX_STEPS_PER_FRAME: u32 = 200;
+/// Wall time one frame may spend stepping.
+const SIM_BUDGET_PER_FRAME: Duration = Duration::from_millis(40);
+
+/// Where the world's commands come from.
+pub enum Driver {
+    /// The trainee: commands gathered for the next step, and every command given so far (with its
+    /// step) for the recording.
+    Live { pending: Vec<Command>, log: Vec<(u64, Command)> },
+    /// A script, played as `dissect run` plays it.
+    Script { player: Player, name: String, metrics: MetricsRecorder, done: bool },
+}
+
+/// One scene running in the page.
+pub struct Session {
+    /// The scene.
+    pub scene: Scene,
+    /// Its text (for the recording).
+    pub source: String,
+    /// Its name (`scenes/meninges.ron`, or the dropped file's name).
+    pub label: String,
+    /// The world.
+    pub world: World,
+    /// The live assessment, when the scene has goals.
+    pub assessor: Option<Assessor>,
+    clock: FixedClock,
+    /// What the renderer shows.
+    pub snapshot: Snapshot,
+    /// Ray casts against the snapshot.
+    pub picker: Picker,
+    picker_step: Option<u64>,
+    /// Input source.
+    pub driver: Driver,
+    /// Frame and step times.
+    pub timing: Timing,
+    started: Instant,
+    dropped: bool,
+    message: Option<(String, Instant)>,
+}
+
+/// The text of a bundled scene or script by name.
+pub fn bundled(table: &[(&str, &'static str)], name: &str) -> Option<&'static str> {
+    table.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
+}
+
+impl Session {
+    /// A live session on a scene's text; the error is the scene's own (`label:line:column: ...`).
+    pub fn new(source: &str, label: &str) -> Result<Self, String> {
+        let scene = Scene::from_str(source, label).map_err(|e| e.to_string())?;
+        // As natively: relaxation by sweeps only, never by wall time, so that runs are deterministic.
+        let world =
+            scene.build_world(false).map_err(|e| format!("{label}: the tissue cannot be built: {e}"))?;
+        let assessor = scene
+            .goals
+            .clone()
+            .map(|g| Assessor::new(g, world.tissue(), f64::from(scene.simulation.rate_hz)));
+        let clock = FixedClock::new(f64::from(scene.simulation.rate_hz), MAX_STEPS_PER_FRAME);
+        let mut snapshot = Snapshot::default();
+        world.snapshot_into(&mut snapshot);
+        Ok(Self {
+            scene,
+            source: source.to_string(),
+            label: label.to_string(),
+            world,
+            assessor,
+            clock,
+            snapshot,
+            picker: Picker::default(),
+            picker_step: None,
+            driver: Driver::Live { pending: Vec::new(), log: Vec::new() },
+            timing: Timing::default(),
+            started: Instant::now(),
+            dropped: false,
+            message: None,
+        })
+    }
+
+    /// Plays `script` (named `name`) instead of taking input.
+    pub fn play(&mut self, script_source: &str, name: &str) -> Result<(), String> {
+        let label = format!("scenes/scripts/{name}.ron");
+        let script = Script::from_str(script_source, &label).map_err(|e| e.to_string())?;
+        script.check_against(&self.scene).map_err(|e| format!("{label}: {e}"))?;
+        let steps = script.duration_steps().min(10_000_000) as usize;
+        self.driver = Driver::Script {
+            player: Player::new(script.0),
+            name: name.to_string(),
+            metrics: MetricsRecorder::with_capacity(steps),
+            done: false,
+        };
+        Ok(())
+    }
+
+    /// Whether the trainee's input reaches the world.
+    pub fn input_enabled(&self) -> bool {
+        matches!(self.driver, Driver::Live { .. })
+    }
+
+    /// Whether a script has played to its end.
+    pub fn script_done(&self) -> bool {
+        matches!(self.driver, Driver::Script { done: true, .. })
+    }
+
+    /// Gathers a command for the next step (consecutive moves collapse into the last).
+    pub fn queue(&mut self, command: Command) {
+        if let Driver::Live { pending, .. } = &mut self.driver {
+            if pending.is_empty() && command == Command::MoveTo(self.world.instrument().target) {
+                return;
+            }
+            if let (Command::MoveTo(p), Some(Command::MoveTo(last))) = (&command, pending.last_mut()) {
+                *last = *p;
+                return;
+            }
+            pending.push(command);
+        }
+    }
+
+    /// Runs the steps a frame of `frame` real time calls for.
+    pub fn advance(&mut self, frame: Duration) {
+        let mut steps = self.clock.advance(frame);
+        let t = Instant::now();
+        let (mut step_us, mut ran) = (0.0, 0u32);
+        if steps > 0
+            && let Driver::Live { pending, log } = &mut self.driver
+        {
+            let step = self.world.step_count();
+            for c in pending.drain(..) {
+                log.push((step, c.clone()));
+                self.world.push(c);
+            }
+        }
+        self.dropped = false;
+        while steps > 0 {
+            if t.elapsed() > SIM_BUDGET_PER_FRAME {
+                self.dropped = true;
+                break;
+            }
+            steps -= 1;
+            // The same loop as `runner::run`: feed, stop when the script and its commands are spent.
+            if let Driver::Script { player, done, .. } = &mut self.driver {
+                if *done {
+                    break;
+                }
+                player.feed(&mut self.world);
+                if player.finished() && self.world.pending().is_empty() {
+                    *done = true;
+                    break;
+                }
+            }
+            step_us += self.world.step().total_us();
+            if let Some(notice) = self.world.tissue_mut().take_notice() {
+                self.say(notice);
+            }
+            ran += 1;
+            if let Driver::Script { metrics, .. } = &mut self.driver {
+                metrics.observe(&self.world);
+            }
+            if let Some(a) = &mut self.assessor {
+                a.observe(&self.world);
+            }
+        }
+        if ran > 0 {
+            self.world.snapshot_into(&mut self.snapshot);
+        }
+        self.timing.push(FrameSample {
+            t: self.started.elapsed().as_secs_f64(),
+            frame_ms: frame.as_secs_f32() * 1000.0,
+            sim_ms: t.elapsed().as_secs_f32() * 1000.0,
+            step_us: if ran > 0 { step_us / ran as f32 } else { 0.0 },
+            steps: ran,
+        });
+    }
+
+    /// Rebuilds the picker if the snapshot moved on.
+    pub fn refresh_picker(&mut self) {
+        if self.picker_step != Some(self.snapshot.step) {
+            self.picker.refresh(&self.snapshot);
+            self.picker_step = Some(self.snapshot.step);
+        }
+    }
+
+    /// Whether the simulation runs slower than real time.
+    pub fn behind(&self) -> bool {
+        let rate = self.world.config().rate_hz as f32;
+        let warm = self.started.elapsed() > Duration::from_secs(2);
+        !self.script_done()
+            && (self.clock.is_behind()
+                || self.dropped
+                || (warm && self.timing.steps_per_second() < 0.9 * rate))
+    }
+
+    /// One line about the session for the status bar.
+    pub fn status(&self) -> String {
+        match &self.driver {
+            Driver::Live { log, .. } => {
+                format!("in the browser: {} commands (download the recording below)", log.len())
+            }
+            Driver::Script { name, done, .. } => {
+                format!("SCRIPT {name}{}", if *done { " — finished" } else { "" })
+            }
+        }
+    }
+
+    /// Shows a message for a few seconds.
+    pub fn say(&mut self, message: impl Into<String>) {
+        self.message = Some((message.into(), Instant::now()));
+    }
+
+    /// The message to show, if still fresh.
+    pub fn message(&self) -> Option<&str> {
+        self.message.as_ref().filter(|(_, t)| t.elapsed() < Duration::from_secs(6)).map(|(m, _)| m.as_str())
+    }
+
+    /// The session's input as a recording (`dissect replay` plays it); a script session records the
+    /// script.
+    pub fn recording_text(&self) -> Result<String, String> {
+        let mut actions = Vec::new();
+        match &self.driver {
+            Driver::Live { log, .. } => {
+                let mut last = None;
+                for (step, c) in log {
+                    if last != Some(*step) {
+                        actions.push(ScriptAction::At(*step));
+                        last = Some(*step);
+                    }
+                    actions.push(ScriptAction::Command(c.clone()));
+                }
+                actions.push(ScriptAction::At(self.world.step_count()));
+            }
+            Driver::Script { name, .. } => {
+                let script = bundled(SCRIPTS, name).and_then(|s| Script::from_str(s, name).ok());
+                actions = script.map(|s| s.0).unwrap_or_default();
+            }
+        }
+        let recording = Recording { scene: self.label.clone(), scene_source: self.source.clone(), actions };
+        ron::ser::to_string_pretty(&recording, ron::ser::PrettyConfig::default()).map_err(|e| e.to_string())
+    }
+
+    /// `report.json`'s text, when the scene has goals.
+    pub fn report_text(&self) -> Option<Result<String, String>> {
+        let a = self.assessor.as_ref()?;
+        Some(crate::training::report_json(&a.assessment(&self.world), a.history()).map_err(|e| e.to_string()))
+    }
+
+    /// The figures of a finished script as `dissect run`'s `metrics.json` has them.
+    pub fn metrics_json(&self) -> Option<String> {
+        let Driver::Script { metrics, .. } = &self.driver else { return None };
+        let mut m = metrics.metrics(&self.world);
+        m.assessment = self.assessor.as_ref().map(|a| a.assessment(&self.world));
+        serde_json::to_string_pretty(&m).ok()
+    }
+}

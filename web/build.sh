@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Builds the browser trainer into web/pkg (serve web/ with web/serve.sh). Installs what it needs from
+# the registries: the wasm32 target (rustup) and wasm-bindgen-cli at the version Cargo.lock pins.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+rustup target list --installed | grep -qx wasm32-unknown-unknown || rustup target add wasm32-unknown-unknown
+version=$(grep -A1 '^name = "wasm-bindgen"$' Cargo.lock | sed -n 's/^version = "\(.*\)"$/\1/p')
+if ! wasm-bindgen --version 2>/dev/null | grep -qF "$version"; then
+  cargo install wasm-bindgen-cli --version "$version" --locked
+fi
+cargo build --release --target wasm32-unknown-unknown --bin dissect-web
+target=${CARGO_TARGET_DIR:-target}
+wasm-bindgen --target web --no-typescript --out-dir web/pkg --out-name dissect \
+  "$target/wasm32-unknown-unknown/release/dissect-web.wasm"
+gzip -9 -k -f web/pkg/dissect_bg.wasm
+echo "web/pkg: $(stat -c %s web/pkg/dissect_bg.wasm) bytes of wasm, $(stat -c %s web/pkg/dissect_bg.wasm.gz) compressed"
