@@ -178,7 +178,7 @@ def main():
     proc = subprocess.Popen(
         [chromium, "--headless=new", "--no-sandbox", "--disable-gpu-sandbox", f"--remote-debugging-port={port}",
          "--remote-debugging-address=127.0.0.1", f"--user-data-dir={profile}", "--window-size=1280,800",
-         "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--enable-unsafe-webgpu",
+         "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
          "--no-first-run", "--no-default-browser-check", "--disable-background-timer-throttling",
          "--disable-renderer-backgrounding", "about:blank"],
         stdout=subprocess.DEVNULL, stderr=open(os.path.join(outdir, "chromium.log"), "w"))
