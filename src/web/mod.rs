@@ -174,8 +174,8 @@ impl WebApp {
         let (trainee, observer) = rigs(&self.session);
         let win = ViewWindow::new(window, surface, &gpu, &renderer, trainee, Some(observer))?;
         let mut hand = Hand::default();
-        hand.tool.kind = self.session.world.instrument().kind;
-        hand.tool.depth = self.session.world.instrument().depth;
+        hand.tool.kind = self.session.world().instrument().kind;
+        hand.tool.depth = self.session.world().instrument().depth;
         Ok(State {
             gpu,
             renderer,
@@ -201,8 +201,8 @@ impl WebApp {
                     state.win.camera = t;
                     state.win.second_camera = Some(o);
                     state.hand = Hand::default();
-                    state.hand.tool.kind = self.session.world.instrument().kind;
-                    state.hand.tool.depth = self.session.world.instrument().depth;
+                    state.hand.tool.kind = self.session.world().instrument().kind;
+                    state.hand.tool.depth = self.session.world().instrument().depth;
                 }
             }
             Err(e) => {
@@ -259,10 +259,10 @@ impl WebApp {
         state.renderer.update(&state.gpu, &session.snapshot).map_err(|e| AppError::Gpu(e.to_string()))?;
 
         let mut actions = Vec::new();
-        let assessment = session.assessor.as_ref().map(|a| a.assessment(&session.world));
+        let assessment = session.assessor().map(|a| a.assessment(session.world()));
         let status = format!("{} · {}", state.backend, session.status());
         let frame = Frame {
-            world: &session.world,
+            world: session.world(),
             scene: &session.scene,
             tool: &state.hand.tool,
             timing: &session.timing,
@@ -318,7 +318,7 @@ impl WebApp {
                     t.fps(),
                     t.steps_per_second(),
                     self.session.scene.simulation.rate_hz,
-                    self.session.world.step_count()
+                    self.session.world().step_count()
                 ),
             );
         }
@@ -343,10 +343,10 @@ impl WebApp {
             }
             Action::SetInsert(mm) if live => state.hand.tool.insert_mm = mm,
             Action::SetMaterial(id, m) if live => match m.validate() {
-                Ok(()) => out.push(Command::SetMaterial(id, m)),
+                Ok(()) => session.queue(crate::simulation::Command::SetMaterial(id, m)),
                 Err(e) => session.say(format!("material refused: {e}")),
             },
-            Action::SetSweeps(n) if live => out.push(Command::SetRelaxSweeps(n)),
+            Action::SetSweeps(n) if live => session.queue(crate::simulation::Command::SetRelaxSweeps(n)),
             Action::Reload if live => {
                 let (source, label) = (session.source.clone(), session.label.clone());
                 self.switch(&source, &label);
@@ -392,9 +392,9 @@ fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let (ray, hit) = input::pick(&session.picker, &session.snapshot, &camera, &pointer);
     let mut out = Vec::new();
     if press {
-        state.hand.press(&session.world, &camera, ray, hit, &mut out);
+        state.hand.press(session.world(), &camera, ray, hit, &mut out);
     } else {
-        state.hand.drag(&session.world, ray, hit, &mut out);
+        state.hand.drag(session.world(), ray, hit, &mut out);
     }
     for c in out {
         session.queue(c);

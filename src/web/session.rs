@@ -1,15 +1,15 @@
-//! A session in the browser: the scene and its world, driven by the trainee (the commands kept in
-//! memory as a recording to download) or by a bundled script (played exactly as `dissect run` plays it,
-//! so that the figures match the native run's).
+//! A session in the browser: an [`Episode`] of the scene's world, driven by the trainee (the commands
+//! also kept in memory, as a recording to download) or by a bundled script (played exactly as
+//! `dissect run` plays it, so that the figures match the native run's).
 
 use std::time::Duration;
 
 use web_time::Instant;
 
-use crate::instrument::{Command, Picker};
-use crate::runner::{MetricsRecorder, Player};
+use crate::instrument::{Command as InstrumentCommand, Picker};
+use crate::runner::{Episode, MetricsRecorder, Player, Source};
 use crate::scene::{Action as ScriptAction, Recording, Scene, Script};
-use crate::simulation::{FixedClock, Snapshot, World};
+use crate::simulation::{Command, Snapshot, World};
 use crate::training::Assessor;
 use crate::ui::{FrameSample, Timing};
 
@@ -33,18 +33,15 @@ pub const SCRIPTS: &[(&str, &str)] = &[
     ("fem_block", include_str!("../../scenes/scripts/fem_block.ron")),
 ];
 
-/// Most steps one frame may run (a slow frame falls behind rather than freezing the page).
-const MAX_STEPS_PER_FRAME: u32 = 200;
-/// Wall time one frame may spend stepping.
+/// Wall time one frame may spend stepping (a slow frame falls behind rather than freezing the page).
 const SIM_BUDGET_PER_FRAME: Duration = Duration::from_millis(40);
 
-/// Where the world's commands come from.
+/// What the page keeps besides the episode.
 pub enum Driver {
-    /// The trainee: commands gathered for the next step, and every command given so far (with its
-    /// step) for the recording.
-    Live { pending: Vec<Command>, log: Vec<(u64, Command)> },
-    /// A script, played as `dissect run` plays it.
-    Script { player: Player, name: String, metrics: MetricsRecorder, done: bool },
+    /// The trainee: every command given so far, with the step it was given before (the recording).
+    Live { log: Vec<(u64, Command)> },
+    /// A bundled script, with `dissect run`'s figures gathered step by step.
+    Script { name: String, metrics: MetricsRecorder, done: bool },
 }
 
 /// One scene running in the page.
@@ -55,17 +52,14 @@ pub struct Session {
     pub source: String,
     /// Its name (`scenes/meninges.ron`, or the dropped file's name).
     pub label: String,
-    /// The world.
-    pub world: World,
-    /// The live assessment, when the scene has goals.
-    pub assessor: Option<Assessor>,
-    clock: FixedClock,
+    /// The world, its assessment and its source of commands.
+    pub episode: Episode,
     /// What the renderer shows.
     pub snapshot: Snapshot,
     /// Ray casts against the snapshot.
     pub picker: Picker,
     picker_step: Option<u64>,
-    /// Input source.
+    /// Input log or script figures.
     pub driver: Driver,
     /// Frame and step times.
     pub timing: Timing,
@@ -86,29 +80,34 @@ impl Session {
         // As natively: relaxation by sweeps only, never by wall time, so that runs are deterministic.
         let world =
             scene.build_world(false).map_err(|e| format!("{label}: the tissue cannot be built: {e}"))?;
-        let assessor = scene
-            .goals
-            .clone()
-            .map(|g| Assessor::new(g, world.tissue(), f64::from(scene.simulation.rate_hz)));
-        let clock = FixedClock::new(f64::from(scene.simulation.rate_hz), MAX_STEPS_PER_FRAME);
+        let assessor = scene.goals.clone().map(|g| Assessor::new(g, &world));
+        let episode = Episode::new(world, assessor, Source::Live);
         let mut snapshot = Snapshot::default();
-        world.snapshot_into(&mut snapshot);
+        episode.snapshot_into(&mut snapshot);
         Ok(Self {
             scene,
             source: source.to_string(),
             label: label.to_string(),
-            world,
-            assessor,
-            clock,
+            episode,
             snapshot,
             picker: Picker::default(),
             picker_step: None,
-            driver: Driver::Live { pending: Vec::new(), log: Vec::new() },
+            driver: Driver::Live { log: Vec::new() },
             timing: Timing::default(),
             started: Instant::now(),
             dropped: false,
             message: None,
         })
+    }
+
+    /// The world.
+    pub fn world(&self) -> &World {
+        self.episode.world()
+    }
+
+    /// The live assessment's assessor, when the scene has goals.
+    pub fn assessor(&self) -> Option<&Assessor> {
+        self.episode.assessor()
     }
 
     /// Plays `script` (named `name`) instead of taking input.
@@ -117,8 +116,8 @@ impl Session {
         let script = Script::from_str(script_source, &label).map_err(|e| e.to_string())?;
         script.check_against(&self.scene).map_err(|e| format!("{label}: {e}"))?;
         let steps = script.duration_steps().min(10_000_000) as usize;
+        self.episode.set_source(Source::Script(Player::new(script.0)));
         self.driver = Driver::Script {
-            player: Player::new(script.0),
             name: name.to_string(),
             metrics: MetricsRecorder::with_capacity(steps),
             done: false,
@@ -128,7 +127,7 @@ impl Session {
 
     /// Whether the trainee's input reaches the world.
     pub fn input_enabled(&self) -> bool {
-        matches!(self.driver, Driver::Live { .. })
+        self.episode.is_live()
     }
 
     /// Whether a script has played to its end.
@@ -137,65 +136,58 @@ impl Session {
     }
 
     /// Gathers a command for the next step (consecutive moves collapse into the last).
-    pub fn queue(&mut self, command: Command) {
-        if let Driver::Live { pending, .. } = &mut self.driver {
-            if pending.is_empty() && command == Command::MoveTo(self.world.instrument().target) {
-                return;
-            }
-            if let (Command::MoveTo(p), Some(Command::MoveTo(last))) = (&command, pending.last_mut()) {
-                *last = *p;
-                return;
-            }
-            pending.push(command);
+    pub fn queue(&mut self, command: impl Into<Command>) {
+        use InstrumentCommand::MoveTo;
+        let command = command.into();
+        if !self.input_enabled() {
+            return;
         }
+        if self.episode.pending().is_empty() && command == MoveTo(self.world().instrument().target).into() {
+            return;
+        }
+        if let (Command::Instrument(MoveTo(p)), Some(Command::Instrument(MoveTo(last)))) =
+            (&command, self.episode.last_pending_mut())
+        {
+            *last = *p;
+            return;
+        }
+        self.episode.push(command);
     }
 
-    /// Runs the steps a frame of `frame` real time calls for.
+    /// Runs the steps a frame of `frame` real time calls for on the world's clock, one at a time (a
+    /// script's figures are gathered after each, as `dissect run` does).
     pub fn advance(&mut self, frame: Duration) {
-        let mut steps = self.clock.advance(frame);
         let t = Instant::now();
+        let due = self.episode.world_mut().due_steps(frame);
+        let given = self.world().step_count();
+        let pending = self.episode.pending().to_vec();
         let (mut step_us, mut ran) = (0.0, 0u32);
-        if steps > 0
-            && let Driver::Live { pending, log } = &mut self.driver
-        {
-            let step = self.world.step_count();
-            for c in pending.drain(..) {
-                log.push((step, c.clone()));
-                self.world.push(c);
-            }
-        }
         self.dropped = false;
-        while steps > 0 {
+        for _ in 0..due {
             if t.elapsed() > SIM_BUDGET_PER_FRAME {
                 self.dropped = true;
                 break;
             }
-            steps -= 1;
-            // The same loop as `runner::run`: feed, stop when the script and its commands are spent.
-            if let Driver::Script { player, done, .. } = &mut self.driver {
-                if *done {
-                    break;
-                }
-                player.feed(&mut self.world);
-                if player.finished() && self.world.pending().is_empty() {
+            let Some(c) = self.episode.step() else {
+                if let Driver::Script { done, .. } = &mut self.driver {
                     *done = true;
-                    break;
                 }
-            }
-            step_us += self.world.step().total_us();
-            if let Some(notice) = self.world.tissue_mut().take_notice() {
-                self.say(notice);
-            }
+                break;
+            };
+            step_us += c.total_us();
             ran += 1;
             if let Driver::Script { metrics, .. } = &mut self.driver {
-                metrics.observe(&self.world);
-            }
-            if let Some(a) = &mut self.assessor {
-                a.observe(&self.world);
+                metrics.observe(self.episode.world());
             }
         }
         if ran > 0 {
-            self.world.snapshot_into(&mut self.snapshot);
+            if let Driver::Live { log } = &mut self.driver {
+                log.extend(pending.into_iter().map(|c| (given, c)));
+            }
+            if let Some(notice) = self.episode.world_mut().tissue_mut().take_notice() {
+                self.say(notice);
+            }
+            self.episode.snapshot_into(&mut self.snapshot);
         }
         self.timing.push(FrameSample {
             t: self.started.elapsed().as_secs_f64(),
@@ -216,10 +208,10 @@ impl Session {
 
     /// Whether the simulation runs slower than real time.
     pub fn behind(&self) -> bool {
-        let rate = self.world.config().rate_hz as f32;
+        let rate = self.world().config().rate_hz as f32;
         let warm = self.started.elapsed() > Duration::from_secs(2);
         !self.script_done()
-            && (self.clock.is_behind()
+            && (self.world().is_behind()
                 || self.dropped
                 || (warm && self.timing.steps_per_second() < 0.9 * rate))
     }
@@ -227,7 +219,7 @@ impl Session {
     /// One line about the session for the status bar.
     pub fn status(&self) -> String {
         match &self.driver {
-            Driver::Live { log, .. } => {
+            Driver::Live { log } => {
                 format!("in the browser: {} commands (download the recording below)", log.len())
             }
             Driver::Script { name, done, .. } => {
@@ -251,7 +243,7 @@ impl Session {
     pub fn recording_text(&self) -> Result<String, String> {
         let mut actions = Vec::new();
         match &self.driver {
-            Driver::Live { log, .. } => {
+            Driver::Live { log } => {
                 let mut last = None;
                 for (step, c) in log {
                     if last != Some(*step) {
@@ -260,7 +252,7 @@ impl Session {
                     }
                     actions.push(ScriptAction::Command(c.clone()));
                 }
-                actions.push(ScriptAction::At(self.world.step_count()));
+                actions.push(ScriptAction::At(self.world().step_count()));
             }
             Driver::Script { name, .. } => {
                 let script = bundled(SCRIPTS, name).and_then(|s| Script::from_str(s, name).ok());
@@ -273,15 +265,17 @@ impl Session {
 
     /// `report.json`'s text, when the scene has goals.
     pub fn report_text(&self) -> Option<Result<String, String>> {
-        let a = self.assessor.as_ref()?;
-        Some(crate::training::report_json(&a.assessment(&self.world), a.history()).map_err(|e| e.to_string()))
+        let a = self.assessor()?;
+        Some(
+            crate::training::report_json(&a.assessment(self.world()), a.history()).map_err(|e| e.to_string()),
+        )
     }
 
     /// The figures of a finished script as `dissect run`'s `metrics.json` has them.
     pub fn metrics_json(&self) -> Option<String> {
         let Driver::Script { metrics, .. } = &self.driver else { return None };
-        let mut m = metrics.metrics(&self.world);
-        m.assessment = self.assessor.as_ref().map(|a| a.assessment(&self.world));
+        let mut m = metrics.metrics(self.world());
+        m.assessment = self.assessor().map(|a| a.assessment(self.world()));
         serde_json::to_string_pretty(&m).ok()
     }
 }
