@@ -33,6 +33,8 @@ pub const SCRIPTS: &[(&str, &str)] = &[
     ("fem_block", include_str!("../../scenes/scripts/fem_block.ron")),
 ];
 
+/// Most steps one frame may run: a quarter of a second at 1 kHz.
+const MAX_STEPS_PER_FRAME: u32 = 250;
 /// Wall time one frame may spend stepping (a slow frame falls behind rather than freezing the page).
 const SIM_BUDGET_PER_FRAME: Duration = Duration::from_millis(40);
 
@@ -78,8 +80,13 @@ impl Session {
     pub fn new(source: &str, label: &str) -> Result<Self, String> {
         let scene = Scene::from_str(source, label).map_err(|e| e.to_string())?;
         // As natively: relaxation by sweeps only, never by wall time, so that runs are deterministic.
-        let world =
+        let mut world =
             scene.build_world(false).map_err(|e| format!("{label}: the tissue cannot be built: {e}"))?;
+        // A software-rendered browser frame can take a quarter of a second: one frame may catch up that
+        // much simulated time (the clock's longest frame) rather than fall behind at once.
+        let mut config = *world.config();
+        config.max_steps_per_advance = config.max_steps_per_advance.max(MAX_STEPS_PER_FRAME);
+        world.set_config(config);
         let assessor = scene.goals.clone().map(|g| Assessor::new(g, &world));
         let episode = Episode::new(world, assessor, Source::Live);
         let mut snapshot = Snapshot::default();
