@@ -5,6 +5,8 @@
 //! two-layer snapshot, each 1280 × 800 with 4× MSAA: the snapshot upload (`update`), both passes, one
 //! submission and a blocking `device.poll` until the GPU is done. No readback. Throughput counts the
 //! layer triangles drawn across both views. `render/frame/meninges_1x`: the same, single-sampled.
+//! `render/frame/meninges_1x_bare`: single-sampled without fibres and shadows (the difference is what
+//! they cost). `render/frame/meninges_1x_128x96`: single-sampled, sheets of 128 × 96 vertices.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use dissect::render::{self, Gpu, Offscreen, OrbitCamera, SceneRenderer, Style, demo};
@@ -19,8 +21,14 @@ fn frame(c: &mut Criterion) {
     let mut group = c.benchmark_group("render/frame");
     group.sample_size(20);
     // 4x MSAA (the default) and single-sampled (what a window on a CPU adapter may choose).
-    for (name, samples) in [("meninges", 4), ("meninges_1x", 1)] {
-        two_views(&gpu, &mut group, name, samples);
+    let bare = Style { show_fibres: false, shadows: false, ..Style::default() };
+    for (name, samples, style, size) in [
+        ("meninges", 4, Style::default(), (64, 48)),
+        ("meninges_1x", 1, Style::default(), (64, 48)),
+        ("meninges_1x_bare", 1, bare, (64, 48)),
+        ("meninges_1x_128x96", 1, Style::default(), (128, 96)),
+    ] {
+        two_views(&gpu, &mut group, name, samples, style, size);
     }
     group.finish();
 }
@@ -30,9 +38,11 @@ fn two_views(
     group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
     name: &str,
     samples: u32,
+    style: Style,
+    (nu, nv): (u32, u32),
 ) {
-    let mut snapshot = demo::two_layers(64, 48, 2);
-    let mut renderer = SceneRenderer::with_samples(gpu, render::OFFSCREEN_FORMAT, Style::default(), samples);
+    let mut snapshot = demo::two_layers(nu, nv, 2);
+    let mut renderer = SceneRenderer::with_samples(gpu, render::OFFSCREEN_FORMAT, style, samples);
     renderer.update(gpu, &snapshot).expect("update");
     let trainee =
         OrbitCamera::from_spec(&CameraSpec { eye: [0.0, 0.078, 0.078], target: [0.0; 3], fov_y_deg: 45.0 });

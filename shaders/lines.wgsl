@@ -1,10 +1,17 @@
-// Thick lines as camera-facing quads: one instance per segment (two world-space end points), six vertices
-// per instance. Width is in pixels (object.params.z), so fibres stay visible at any zoom. Shaded across
-// the width like a thin tube.
+// Thick lines as camera-facing quads: one instance per segment (two world-space end points and a
+// stretch), six vertices per instance. Width is in pixels (object.params.z), so fibres stay visible at
+// any zoom. Shaded across the width like a thin tube.
+//
+// Fibres thin and whiten as they stretch: width over the square root of the stretch (a strand keeps its
+// volume), colour towards white as the stretch nears the tear stretch (object.params.w). With
+// object.params.x = 1 each segment's ends are extended by half the width and the quad is cut to a
+// disc: a zero-length segment draws a round dot (the cut-fibre marks).
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) across: f32,
+    @location(1) along: f32,
+    @location(2) whiten: f32,
 };
 
 @vertex
@@ -12,6 +19,7 @@ fn vs_main(
     @builtin(vertex_index) vi: u32,
     @location(0) a: vec3<f32>,
     @location(1) b: vec3<f32>,
+    @location(2) stretch: f32,
 ) -> VsOut {
     // Two triangles: (0,-) (1,-) (1,+)  (0,-) (1,+) (0,+)
     var ends = array<f32, 6>(0.0, 1.0, 1.0, 0.0, 1.0, 0.0);
@@ -27,6 +35,8 @@ fn vs_main(
         var gone: VsOut;
         gone.clip = vec4<f32>(0.0, 0.0, 0.0, 0.0);
         gone.across = 0.0;
+        gone.along = 0.0;
+        gone.whiten = 0.0;
         return gone;
     }
     if ca.w < eps {
@@ -44,16 +54,27 @@ fn vs_main(
     var p = select(ca, cb, t > 0.5);
     // Width in pixels, scaled for the view height (camera.viewport.w), never under one pixel. NDC spans
     // 2 units per viewport, so one pixel is 2 / vp: offsetting by width / vp puts half on each side.
-    let width = max(object.params.z * camera.viewport.w, 1.0);
-    p = vec4<f32>(p.xy + perp * side * width / vp * p.w, p.zw);
+    let s = max(stretch, 1.0);
+    let width = max(object.params.z * camera.viewport.w / sqrt(s), 1.0);
+    let dot_mode = object.params.x > 0.5;
+    let extend = select(0.0, width, dot_mode) * (t * 2.0 - 1.0);
+    p = vec4<f32>(p.xy + (perp * side * width + d * extend) / vp * p.w, p.zw);
     var out: VsOut;
     out.clip = p;
     out.across = side;
+    // Along the quad in half-widths from its middle: ±1 at the extended ends of a dot.
+    out.along = select(0.0, t * 2.0 - 1.0, dot_mode) * (dl + 2.0 * width) / max(2.0 * width, 1e-6);
+    let tear = object.params.w;
+    out.whiten = select(0.0, smoothstep(1.0, tear, s), tear > 1.0);
     return out;
 }
 
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
+    if object.params.x > 0.5 && in.across * in.across + in.along * in.along > 1.0 {
+        discard;
+    }
     let shade = 1.0 - 0.45 * in.across * in.across;
-    return output(object.color.rgb * shade, object.color.a);
+    let c = mix(object.color.rgb, vec3<f32>(1.0, 0.98, 0.95), in.whiten * 0.85);
+    return output(c * shade, object.color.a);
 }

@@ -23,6 +23,76 @@ pub struct Snapshot {
     pub instrument: Option<InstrumentPose>,
     /// The scalpel stroke being drawn right now (world space), empty when none.
     pub cut_path: Vec<[f32; 3]>,
+    /// Stretch of each intact fibre (world length over rest length), in the order of `fibres`.
+    pub fibre_stretch: Vec<f32>,
+    /// Stretch at which the fibres tear (their material's tear ratio); `0` when they never tear.
+    pub fibre_tear_stretch: f32,
+    /// Connective fibres that were cut or torn, with their two ends where they are now.
+    pub broken_fibres: Vec<BrokenFibre>,
+    /// The forceps left clamped on the tissue while another instrument is in hand, if any.
+    pub clamped: Option<InstrumentPose>,
+    /// Regions of the exercise to draw on the tissue's surface (from the scene's goals).
+    pub regions: Vec<SurfaceRegion>,
+}
+
+/// A connective fibre that no longer holds: its two ends (world space, metres; the lower layer's first)
+/// and how it broke.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BrokenFibre {
+    /// Where its ends are now: on the lower layer, then on the upper.
+    pub ends: [[f32; 3]; 2],
+    /// Cut by the scalpel (`true`) or torn by over-stretching (`false`).
+    pub cut: bool,
+}
+
+/// What a region drawn on the tissue means.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum RegionKind {
+    /// Where the trainee should work.
+    #[default]
+    Target,
+    /// Where nothing may be cut or torn.
+    Forbidden,
+}
+
+/// A region of the surface in fractions of its `u` and `v` extents (as goals give them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RegionShape {
+    /// `u` from `u[0]` to `u[1]`, `v` from `v[0]` to `v[1]`.
+    Rect {
+        /// Range of `u`, fractions.
+        u: [f32; 2],
+        /// Range of `v`, fractions.
+        v: [f32; 2],
+    },
+    /// A disc around `center` of `radius`, fractions.
+    Disc {
+        /// Centre `(u, v)`, fractions.
+        center: [f32; 2],
+        /// Radius, a fraction.
+        radius: f32,
+    },
+}
+
+/// A region drawn on the tissue's surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceRegion {
+    /// Target or forbidden.
+    pub kind: RegionKind,
+    /// Where, in surface fractions.
+    pub shape: RegionShape,
+}
+
+/// The procedural texture a layer is drawn with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SurfacePattern {
+    /// A fibrous membrane (the dura): fine grain along `u`.
+    #[default]
+    Grain,
+    /// A thin membrane with vessels on it (the arachnoid).
+    Vessels,
+    /// No pattern (volumes, finite-element blocks).
+    Plain,
 }
 
 /// A layer's current surface as triangles.
@@ -40,6 +110,15 @@ pub struct LayerMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Bumped whenever `triangles` changes (a cut or a tear), so index buffers are rebuilt only then.
     pub topology_version: u64,
+    /// Where each vertex sits on the surface at rest, fractions of the `u` and `v` extents (textures
+    /// and regions are drawn in these coordinates, so they move with the tissue). One per position.
+    pub uv: Vec<[f32; 2]>,
+    /// The surface's extent along `u` and `v`, metres (the scale of the texture).
+    pub uv_size: [f32; 2],
+    /// Thickness of the layer, metres: cut edges are drawn this deep, towards the other layer.
+    pub thickness: f32,
+    /// The texture it is drawn with.
+    pub pattern: SurfacePattern,
 }
 
 /// Which instrument is drawn.

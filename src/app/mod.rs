@@ -404,6 +404,12 @@ fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action:
             state.trainee_ui.help.open = open;
             state.observer_ui.help.open = open;
         }
+        Action::ToggleRegions => {
+            let mut style = *state.renderer.style();
+            style.show_regions = !style.show_regions;
+            state.renderer.set_style(style);
+            session.say(if style.show_regions { "regions shown (G hides them)" } else { "regions hidden (G shows them)" });
+        }
         Action::ResetCameras => {
             state.trainee.camera.reset();
             if let Some(c) = state.trainee.second_camera.as_mut() {
@@ -459,6 +465,7 @@ fn key_action(key: &Key, instruments: &[InstrumentKind]) -> Option<Action> {
             "?" => Some(Action::ToggleHelp),
             "p" | "P" => Some(Action::Screenshot),
             "r" | "R" => Some(Action::Report),
+            "g" | "G" => Some(Action::ToggleRegions),
             "u" | "U" => Some(Action::SetDepth(CutDepth::Upper)),
             "b" | "B" => Some(Action::SetDepth(CutDepth::Between)),
             "l" | "L" => Some(Action::SetDepth(CutDepth::Lower)),

@@ -4,7 +4,9 @@
 
 use std::f32::consts::PI;
 
-use crate::snapshot::{InstrumentKind, InstrumentPose, LayerMesh, Snapshot};
+use crate::snapshot::{
+    InstrumentKind, InstrumentPose, LayerMesh, RegionKind, RegionShape, Snapshot, SurfacePattern, SurfaceRegion,
+};
 
 /// Side of the square the sheets cover, metres.
 pub const EXTENT: f32 = 0.08;
@@ -19,12 +21,20 @@ pub fn sheet_height(x: f32, z: f32, sign: f32) -> f32 {
 }
 
 fn sheet(name: &str, color: [f32; 4], nu: u32, nv: u32, sign: f32) -> LayerMesh {
-    let mut layer = LayerMesh { name: name.into(), color, ..Default::default() };
+    let mut layer = LayerMesh {
+        name: name.into(),
+        color,
+        uv_size: [EXTENT, EXTENT],
+        thickness: if sign > 0.0 { 0.0006 } else { 0.0003 },
+        pattern: if sign > 0.0 { SurfacePattern::Grain } else { SurfacePattern::Vessels },
+        ..Default::default()
+    };
     for j in 0..nv {
         for i in 0..nu {
             let x = EXTENT * (i as f32 / (nu - 1) as f32 - 0.5);
             let z = EXTENT * (j as f32 / (nv - 1) as f32 - 0.5);
             layer.positions.push([x, sheet_height(x, z, sign), z]);
+            layer.uv.push([i as f32 / (nu - 1) as f32, j as f32 / (nv - 1) as f32]);
             // Gradient of the dome gives the normal; it points away from the other sheet.
             let dx = -DOME * PI / EXTENT * (PI * x / EXTENT).sin() * (PI * z / EXTENT).cos();
             let dz = -DOME * PI / EXTENT * (PI * x / EXTENT).cos() * (PI * z / EXTENT).sin();
@@ -46,7 +56,8 @@ fn sheet(name: &str, color: [f32; 4], nu: u32, nv: u32, sign: f32) -> LayerMesh 
 }
 
 /// Two `nu` × `nv` sheets, a fibre at every `fibre_step`-th vertex in both directions (see [`connect`]),
-/// forceps (open) above the front right quarter. `nu` and `nv` are at least 2.
+/// forceps (open) above the front right quarter, a target region over the middle and a forbidden strip
+/// along the far edge. `nu` and `nv` are at least 2.
 pub fn two_layers(nu: u32, nv: u32, fibre_step: u32) -> Snapshot {
     let (nu, nv, step) = (nu.max(2), nv.max(2), fibre_step.max(1) as usize);
     let upper = sheet("dura", [0.62, 0.45, 0.30, 1.0], nu, nv, 1.0);
@@ -62,7 +73,12 @@ pub fn two_layers(nu: u32, nv: u32, fibre_step: u32) -> Snapshot {
             roll: 0.6,
             closed: false,
         }),
-        cut_path: Vec::new(),
+        regions: vec![
+            SurfaceRegion { kind: RegionKind::Target, shape: RegionShape::Rect { u: [0.3, 0.7], v: [0.3, 0.7] } },
+            SurfaceRegion { kind: RegionKind::Forbidden, shape: RegionShape::Rect { u: [0.0, 1.0], v: [0.88, 1.0] } },
+        ],
+        fibre_tear_stretch: 4.0,
+        ..Snapshot::default()
     };
     connect(&mut snapshot, nu, nv, step);
     snapshot
@@ -72,6 +88,7 @@ pub fn two_layers(nu: u32, nv: u32, fibre_step: u32) -> Snapshot {
 /// every `step`-th vertex of an `nu` × `nv` grid, border included, using the layers' current positions.
 pub fn connect(snapshot: &mut Snapshot, nu: u32, nv: u32, step: usize) {
     snapshot.fibres.clear();
+    snapshot.fibre_stretch.clear();
     let [upper, lower, ..] = snapshot.layers.as_slice() else { return };
     for j in (0..nv as usize).step_by(step.max(1)) {
         for i in (0..nu as usize).step_by(step.max(1)) {
@@ -80,6 +97,7 @@ pub fn connect(snapshot: &mut Snapshot, nu: u32, nv: u32, step: usize) {
                 continue;
             };
             snapshot.fibres.push([bottom, top]);
+            snapshot.fibre_stretch.push(1.0);
         }
     }
 }

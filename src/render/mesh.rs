@@ -118,6 +118,33 @@ impl MeshData {
         m
     }
 
+    /// A bar along Z through rectangular cross-sections `(z, half_width, y_bottom, half_height)`, in
+    /// order of `z`, joined by flat quads; both ends capped. Lofts a bent, tapering forceps leaf.
+    pub fn loft_z(sections: &[(f32, f32, f32, f32)]) -> Self {
+        let corners = |&(z, hw, y0, hh): &(f32, f32, f32, f32)| {
+            [
+                Vec3::new(-hw, y0, z),
+                Vec3::new(hw, y0, z),
+                Vec3::new(hw, y0 + 2.0 * hh, z),
+                Vec3::new(-hw, y0 + 2.0 * hh, z),
+            ]
+        };
+        let mut m = Self::default();
+        for w in sections.windows(2) {
+            let (a, b) = (corners(&w[0]), corners(&w[1]));
+            for i in 0..4 {
+                let j = (i + 1) % 4;
+                m.quad([a[i], a[j], b[j], b[i]]);
+            }
+        }
+        if let (Some(first), Some(last)) = (sections.first(), sections.last()) {
+            let (a, b) = (corners(first), corners(last));
+            m.quad([a[0], a[1], a[2], a[3]]);
+            m.quad([b[3], b[2], b[1], b[0]]);
+        }
+        m
+    }
+
     /// A convex outline in the local XZ plane (points `(x, z)` in order), extruded to `±half_thickness`
     /// along Y. Flat faces.
     pub fn extrude_y(outline: &[(f32, f32)], half_thickness: f32) -> Self {
@@ -165,10 +192,10 @@ impl Part {
     pub const ALL: [Part; 4] = [Part::Probe, Part::Jaw, Part::ScalpelHandle, Part::ScalpelBlade];
 }
 
-/// Forceps jaw length from tip to hinge, metres.
-pub const JAW_LENGTH: f32 = 0.07;
-/// Forceps opening: angle of each jaw off the axis when open, radians.
-pub const JAW_OPEN_ANGLE: f32 = 0.09;
+/// Forceps leaf length from the tip to where the two leaves join (they flex about it), metres.
+pub const JAW_LENGTH: f32 = 0.1;
+/// Forceps opening: angle of each leaf off the axis when open, radians.
+pub const JAW_OPEN_ANGLE: f32 = 0.025;
 const PROBE_BALL: f32 = 0.0015;
 
 /// The local-frame mesh of a part.
@@ -180,10 +207,39 @@ pub fn part_mesh(part: Part) -> MeshData {
             m.append(&MeshData::cylinder_z(0.05, 0.0022, 0.11, 0.0025, 16));
             m
         }
-        Part::Jaw => MeshData::tapered_box_z(0.0, 0.0007, 0.0004, JAW_LENGTH, 0.0019, 0.0009, 0.00015),
-        Part::ScalpelHandle => MeshData::tapered_box_z(0.03, 0.0035, 0.0012, 0.11, 0.0045, 0.0015, -0.0013),
+        Part::Jaw => MeshData::loft_z(&[
+            (0.0, 0.0005, 0.0001, 0.0003),
+            (0.008, 0.0009, 0.0002, 0.00032),
+            (0.03, 0.0019, 0.0009, 0.00035),
+            (0.055, 0.0027, 0.0019, 0.00035),
+            (0.08, 0.0028, 0.0024, 0.00035),
+            (JAW_LENGTH, 0.0026, 0.0005, 0.0006),
+        ]),
+        Part::ScalpelHandle => {
+            let mut m = MeshData::tapered_box_z(0.028, 0.0032, 0.0011, 0.125, 0.0046, 0.0014, -0.0012);
+            // A fluted grip: raised bars across the handle.
+            for k in 0..7 {
+                let z = 0.045 + 0.006 * k as f32;
+                m.append(&MeshData::tapered_box_z(z, 0.0038, 0.0013, z + 0.002, 0.0038, 0.0013, -0.0014));
+            }
+            m
+        }
+        // A No. 10 blade: a curved cutting belly in front of a straight spine (convex outline).
         Part::ScalpelBlade => MeshData::extrude_y(
-            &[(0.0, 0.0), (0.0045, 0.012), (0.0035, 0.031), (-0.0015, 0.031), (-0.0015, 0.008)],
+            &[
+                (0.0, 0.0),
+                (0.0015, 0.0015),
+                (0.003, 0.004),
+                (0.004, 0.008),
+                (0.0045, 0.013),
+                (0.0043, 0.02),
+                (0.0039, 0.026),
+                (0.0035, 0.032),
+                (-0.0015, 0.032),
+                (-0.0015, 0.012),
+                (-0.001, 0.005),
+                (-0.0005, 0.002),
+            ],
             0.00015,
         ),
     }
@@ -259,6 +315,6 @@ mod tests {
         let open = gap(&pose);
         pose.closed = true;
         let closed = gap(&pose);
-        assert!(open > 0.01 && closed < 1e-4, "open {open}, closed {closed}");
+        assert!(open > 0.004 && closed < 1e-4, "open {open}, closed {closed}");
     }
 }

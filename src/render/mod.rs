@@ -1,6 +1,8 @@
 //! Drawing the simulation with wgpu: the device ([`Gpu`]), the scene pipelines and their buffers
 //! ([`SceneRenderer`], [`SceneView`]), the orbit camera and picking rays ([`OrbitCamera`]), the procedural
-//! instrument models ([`mesh`]), a synthetic test scene ([`demo`]) and headless capture to PNG ([`Offscreen`], [`render_to_image`]).
+//! instrument models ([`mesh`]), the procedural tissue texture ([`texture`]), what is derived from a
+//! snapshot on the CPU (cut-edge walls, fibre instances: [`geometry`]), a synthetic test scene
+//! ([`demo`]) and headless capture to PNG ([`Offscreen`], [`render_to_image`]).
 //!
 //! It reads only a [`Snapshot`](crate::snapshot::Snapshot) and a
 //! [`CameraSpec`](crate::snapshot::CameraSpec); it never reaches into the engine. It may import wgpu,
@@ -14,9 +16,11 @@ pub mod camera;
 mod capture;
 pub mod demo;
 mod error;
+pub mod geometry;
 mod gpu;
 pub mod mesh;
 mod scene;
+pub mod texture;
 
 pub use camera::OrbitCamera;
 pub use capture::{OFFSCREEN_FORMAT, Offscreen};

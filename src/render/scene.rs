@@ -1,8 +1,10 @@
-//! The scene pipelines and the GPU copies of a snapshot: layers, fibres, instrument, cut path.
+//! The scene pipelines and the GPU copies of a snapshot: layers (textured, with their cut edges as
+//! walls of the layer's thickness), fibres, broken-fibre stubs and cut marks, instruments (the one in
+//! hand and forceps left clamped), the instruments' shadows, the exercise's regions, the cut path.
 //!
 //! [`SceneRenderer::update`] uploads a [`Snapshot`] into buffers it keeps between frames (positions and
-//! normals every frame with `write_buffer`; index buffers only when a layer's `topology_version` changes;
-//! new buffers only when something grows). [`SceneRenderer::render`] records one pass into a
+//! normals every frame with `write_buffer`; index buffers, surface coordinates and open edges only when
+//! a layer's `topology_version` changes; new buffers only when something grows). [`SceneRenderer::render`] records one pass into a
 //! [`SceneView`], which owns what differs per window or camera: the multisampled colour and depth
 //! targets and the camera uniform.
 
@@ -12,9 +14,11 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use super::camera::OrbitCamera;
+use super::geometry::{self, LineInstance};
 use super::mesh::{self, Part};
+use super::texture::{TEXTURE_SIZE, TEXTURE_TILE_M, tissue_texels};
 use super::{Gpu, RenderError};
-use crate::snapshot::Snapshot;
+use crate::snapshot::{InstrumentKind, InstrumentPose, RegionKind, RegionShape, Snapshot, SurfacePattern};
 
 const MESH_WGSL: &str =
     concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/mesh.wgsl"));
@@ -43,20 +47,42 @@ pub struct Style {
     pub steel_color: [f32; 3],
     /// The scalpel handle.
     pub handle_color: [f32; 3],
+    /// Marks where fibres were cut (drawn over everything, so they show through the upper layer).
+    pub mark_color: [f32; 3],
+    /// Mark diameter in pixels at a 800-pixel-tall view.
+    pub mark_width_px: f32,
+    /// Draw the exercise's target and forbidden regions on the tissue.
+    pub show_regions: bool,
+    /// Draw the instruments' shadows.
+    pub shadows: bool,
+    /// Draw the connective fibres, their stubs and the cut marks.
+    pub show_fibres: bool,
 }
 
 impl Default for Style {
     fn default() -> Self {
         Self {
-            fibre_color: [0.92, 0.86, 0.62],
+            fibre_color: [0.93, 0.84, 0.66],
             fibre_width_px: 2.5,
             cut_color: [0.1, 0.95, 0.35],
             cut_width_px: 4.0,
-            steel_color: [0.62, 0.65, 0.7],
-            handle_color: [0.12, 0.14, 0.18],
+            steel_color: [0.7, 0.73, 0.78],
+            handle_color: [0.5, 0.53, 0.58],
+            mark_color: [1.0, 0.78, 0.1],
+            mark_width_px: 6.0,
+            show_regions: true,
+            shadows: true,
+            show_fibres: true,
         }
     }
 }
+
+/// Direction towards the overhead lamp that casts the instruments' shadows: above, a little to −X and
+/// to −Z (the far side from the trainee's usual eye), so a shadow falls towards the viewer and to the
+/// right, below the shaft on the screen rather than hidden behind it.
+const LAMP: [f32; 3] = [-0.3, 1.0, -0.45];
+/// Strength of the shadows (share of the lamp's light they take away).
+const SHADOW_STRENGTH: f32 = 0.85;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -65,6 +91,17 @@ struct CameraUniform {
     eye: [f32; 4],
     light: [f32; 4],
     viewport: [f32; 4],
+    scene: SceneUniform,
+}
+
+/// The part of the camera uniform that comes from the snapshot, the same for every view.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct SceneUniform {
+    lamp: [f32; 4],
+    casters: [[f32; 4]; 4],
+    regions: [[f32; 4]; 4],
+    region_kinds: [f32; 4],
 }
 
 #[repr(C)]
@@ -73,6 +110,7 @@ struct ObjectUniform {
     model: [[f32; 4]; 4],
     color: [f32; 4],
     params: [f32; 4],
+    extra: [f32; 4],
 }
 
 const OBJECT_SIZE: u64 = std::mem::size_of::<ObjectUniform>() as u64;
@@ -130,12 +168,18 @@ impl GrowBuffer {
 struct LayerGpu {
     positions: GrowBuffer,
     normals: GrowBuffer,
+    uv: GrowBuffer,
     indices: GrowBuffer,
     index_count: u32,
     vertex_count: u32,
     /// Largest index in the current index buffer (checked against the vertex count every frame).
     max_index: u32,
     topology_version: Option<u64>,
+    /// Open edges (cuts), rebuilt with the index buffer.
+    edges: Vec<[u32; 3]>,
+    wall_positions: GrowBuffer,
+    wall_normals: GrowBuffer,
+    wall_vertex_count: u32,
 }
 
 #[derive(Debug)]
@@ -146,6 +190,30 @@ struct PartGpu {
     index_count: u32,
 }
 
+/// Line instances of one kind (fibres, stubs, marks, the cut path) on the GPU.
+#[derive(Debug)]
+struct LinesGpu {
+    buffer: GrowBuffer,
+    count: u32,
+    scratch: Vec<LineInstance>,
+}
+
+impl LinesGpu {
+    fn new(device: &wgpu::Device, label: &'static str) -> Self {
+        let bytes = std::mem::size_of::<LineInstance>() as u64 * 256;
+        Self { buffer: GrowBuffer::new(device, label, wgpu::BufferUsages::VERTEX, bytes), count: 0, scratch: Vec::new() }
+    }
+
+    /// Uploads the scratch instances; returns whether the buffer grew.
+    fn upload(&mut self, gpu: &Gpu) -> bool {
+        self.count = self.scratch.len() as u32;
+        self.buffer.write(gpu, bytemuck::cast_slice(&self.scratch))
+    }
+}
+
+/// Instrument parts drawn at most: two for the instrument in hand, two for clamped forceps.
+const MAX_PARTS: usize = 4;
+
 /// Pipelines and the GPU-side copy of the latest snapshot. One per device; shared by all views.
 #[derive(Debug)]
 pub struct SceneRenderer {
@@ -153,7 +221,8 @@ pub struct SceneRenderer {
     sample_count: u32,
     style: Style,
     camera_layout: wgpu::BindGroupLayout,
-    mesh_pipeline: wgpu::RenderPipeline,
+    tissue_pipeline: wgpu::RenderPipeline,
+    solid_pipeline: wgpu::RenderPipeline,
     line_pipeline: wgpu::RenderPipeline,
     overlay_line_pipeline: wgpu::RenderPipeline,
     background_pipeline: wgpu::RenderPipeline,
@@ -162,17 +231,19 @@ pub struct SceneRenderer {
     object_bind_group: wgpu::BindGroup,
     object_stride: u64,
     object_scratch: Vec<u8>,
+    texture_bind_group: wgpu::BindGroup,
     layers: Vec<LayerGpu>,
     parts: Vec<PartGpu>,
-    instrument: [Option<Part>; 2],
-    fibres: GrowBuffer,
-    fibre_count: u32,
-    cut: GrowBuffer,
-    cut_count: u32,
-    cut_scratch: Vec<[[f32; 3]; 2]>,
+    instrument: [Option<Part>; MAX_PARTS],
+    fibres: LinesGpu,
+    stubs: LinesGpu,
+    marks: LinesGpu,
+    cut: LinesGpu,
+    edge_scratch: Vec<(u64, u32)>,
+    wall_scratch: (Vec<[f32; 3]>, Vec<[f32; 3]>),
+    scene: SceneUniform,
     stats: UploadStats,
 }
-
 /// What one view (a window, or an offscreen image) needs besides the shared [`SceneRenderer`]: its
 /// multisampled colour target, depth buffer and camera uniform. Make one per view: the camera uniform is
 /// written when the view is rendered, so two cameras in one submission need two views.
@@ -247,6 +318,23 @@ fn mat(m: Mat4) -> [[f32; 4]; 4] {
     m.to_cols_array_2d()
 }
 
+/// A shadow caster for an instrument pose: a capsule from just above the tip up the shaft.
+fn caster(pose: &InstrumentPose) -> [[f32; 4]; 2] {
+    let axis = Vec3::from(pose.axis).normalize_or(Vec3::Y);
+    let tip = Vec3::from(pose.tip);
+    let radius = match pose.kind {
+        InstrumentKind::Forceps => 0.0022,
+        InstrumentKind::Scalpel => 0.0025,
+        InstrumentKind::Probe => 0.0012,
+    };
+    [(tip + axis * 0.001).extend(radius).into(), (tip + axis * 0.11).extend(1.0).into()]
+}
+
+/// The colour of a layer's cut edge: the layer's colour, darker and redder (raw, moist tissue).
+fn wall_color(c: [f32; 4]) -> [f32; 4] {
+    [c[0] * 0.8, c[1] * 0.45, c[2] * 0.42, 1.0]
+}
+
 impl SceneRenderer {
     /// Builds the pipelines for views of colour format `format` (a surface's format, or
     /// [`OFFSCREEN_FORMAT`](super::OFFSCREEN_FORMAT)). Uses 4× MSAA when the adapter allows it for
@@ -282,8 +370,34 @@ impl SceneRenderer {
             label: Some("object"),
             entries: &[uniform_entry(true, OBJECT_SIZE)],
         });
-        let scene_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("scene"),
+        let texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tissue texture"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("meshes"),
+            bind_group_layouts: &[Some(&camera_layout), Some(&object_layout), Some(&texture_layout)],
+            immediate_size: 0,
+        });
+        let line_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lines"),
             bind_group_layouts: &[Some(&camera_layout), Some(&object_layout)],
             immediate_size: 0,
         });
@@ -302,30 +416,20 @@ impl SceneRenderer {
         let lines_module = module("lines.wgsl", LINES_WGSL);
         let background_module = module("background.wgsl", BACKGROUND_WGSL);
 
-        let vec3_attr = |location| {
-            [wgpu::VertexAttribute {
-                format: wgpu::VertexFormat::Float32x3,
-                offset: 0,
-                shader_location: location,
-            }]
+        let attr = |location, format| {
+            [wgpu::VertexAttribute { format, offset: 0, shader_location: location }]
         };
-        let pos_attr = vec3_attr(0);
-        let nrm_attr = vec3_attr(1);
-        let mesh_buffers = [
-            Some(wgpu::VertexBufferLayout {
-                array_stride: 12,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &pos_attr,
-            }),
-            Some(wgpu::VertexBufferLayout {
-                array_stride: 12,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &nrm_attr,
-            }),
-        ];
-        let segment_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+        let pos_attr = attr(0, wgpu::VertexFormat::Float32x3);
+        let nrm_attr = attr(1, wgpu::VertexFormat::Float32x3);
+        let uv_attr = attr(2, wgpu::VertexFormat::Float32x2);
+        let per_vertex = |stride, attributes| {
+            Some(wgpu::VertexBufferLayout { array_stride: stride, step_mode: wgpu::VertexStepMode::Vertex, attributes })
+        };
+        let tissue_buffers = [per_vertex(12, &pos_attr[..]), per_vertex(12, &nrm_attr[..]), per_vertex(8, &uv_attr[..])];
+        let solid_buffers = [per_vertex(12, &pos_attr[..]), per_vertex(12, &nrm_attr[..])];
+        let segment_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32];
         let line_buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: 24,
+            array_stride: std::mem::size_of::<LineInstance>() as u64,
             step_mode: wgpu::VertexStepMode::Instance,
             attributes: &segment_attrs,
         })];
@@ -338,19 +442,25 @@ impl SceneRenderer {
                 bias: wgpu::DepthBiasState::default(),
             })
         };
-        let targets =
-            [Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
+        let opaque = [Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
+        let blended = [Some(wgpu::ColorTargetState {
+            format,
+            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
         let pipeline = |label: &str,
                         layout: &wgpu::PipelineLayout,
                         module: &wgpu::ShaderModule,
+                        entry: (&str, &str),
                         buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
-                        depth_stencil: Option<wgpu::DepthStencilState>| {
+                        depth_stencil: Option<wgpu::DepthStencilState>,
+                        targets: &[Option<wgpu::ColorTargetState>]| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(layout),
                 vertex: wgpu::VertexState {
                     module,
-                    entry_point: Some("vs_main"),
+                    entry_point: Some(entry.0),
                     compilation_options: Default::default(),
                     buffers,
                 },
@@ -363,48 +473,67 @@ impl SceneRenderer {
                 multisample: wgpu::MultisampleState { count: sample_count, ..Default::default() },
                 fragment: Some(wgpu::FragmentState {
                     module,
-                    entry_point: Some("fs_main"),
+                    entry_point: Some(entry.1),
                     compilation_options: Default::default(),
-                    targets: &targets,
+                    targets,
                 }),
                 multiview_mask: None,
                 cache: None,
             })
         };
-        let mesh_pipeline = pipeline(
-            "mesh",
-            &scene_layout,
+        let less = wgpu::CompareFunction::Less;
+        let tissue_pipeline = pipeline(
+            "tissue",
+            &mesh_layout,
             &mesh_module,
-            &mesh_buffers,
-            depth(true, wgpu::CompareFunction::Less),
+            ("vs_tissue", "fs_tissue"),
+            &tissue_buffers,
+            depth(true, less),
+            &opaque,
+        );
+        let solid_pipeline = pipeline(
+            "solid",
+            &mesh_layout,
+            &mesh_module,
+            ("vs_solid", "fs_solid"),
+            &solid_buffers,
+            depth(true, less),
+            &opaque,
         );
         let line_pipeline = pipeline(
             "lines",
-            &scene_layout,
+            &line_layout,
             &lines_module,
+            ("vs_main", "fs_main"),
             &line_buffers,
             depth(true, wgpu::CompareFunction::LessEqual),
+            &opaque,
         );
         let overlay_line_pipeline = pipeline(
             "lines overlay",
-            &scene_layout,
+            &line_layout,
             &lines_module,
+            ("vs_main", "fs_main"),
             &line_buffers,
             depth(false, wgpu::CompareFunction::Always),
+            &blended,
         );
         let background_pipeline = pipeline(
             "background",
             &background_layout,
             &background_module,
+            ("vs_main", "fs_main"),
             &[],
             // Drawn after the opaque scene at the far plane: only pixels nothing covered are shaded.
             depth(false, wgpu::CompareFunction::LessEqual),
+            &opaque,
         );
 
         let object_stride =
             OBJECT_SIZE.next_multiple_of(u64::from(device.limits().min_uniform_buffer_offset_alignment));
-        let objects = GrowBuffer::new(device, "objects", wgpu::BufferUsages::UNIFORM, object_stride * 8);
+        let objects = GrowBuffer::new(device, "objects", wgpu::BufferUsages::UNIFORM, object_stride * 16);
         let object_bind_group = Self::object_bind_group(device, &object_layout, &objects.buffer);
+        let texture_bind_group = Self::tissue_texture(gpu, &texture_layout);
 
         let parts = Part::ALL
             .iter()
@@ -441,7 +570,8 @@ impl SceneRenderer {
             sample_count,
             style,
             camera_layout,
-            mesh_pipeline,
+            tissue_pipeline,
+            solid_pipeline,
             line_pipeline,
             overlay_line_pipeline,
             background_pipeline,
@@ -450,16 +580,67 @@ impl SceneRenderer {
             object_bind_group,
             object_stride,
             object_scratch: Vec::new(),
+            texture_bind_group,
             layers: Vec::new(),
             parts,
-            instrument: [None; 2],
-            fibres: GrowBuffer::new(device, "fibres", wgpu::BufferUsages::VERTEX, 24 * 1024),
-            fibre_count: 0,
-            cut: GrowBuffer::new(device, "cut path", wgpu::BufferUsages::VERTEX, 24 * 256),
-            cut_count: 0,
-            cut_scratch: Vec::new(),
+            instrument: [None; MAX_PARTS],
+            fibres: LinesGpu::new(device, "fibres"),
+            stubs: LinesGpu::new(device, "fibre stubs"),
+            marks: LinesGpu::new(device, "cut marks"),
+            cut: LinesGpu::new(device, "cut path"),
+            edge_scratch: Vec::new(),
+            wall_scratch: (Vec::new(), Vec::new()),
+            scene: SceneUniform::default(),
             stats: UploadStats::default(),
         }
+    }
+
+    /// The procedural tissue texture (made once on the CPU) and its repeating, filtering sampler.
+    fn tissue_texture(gpu: &Gpu, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
+        let size = wgpu::Extent3d { width: TEXTURE_SIZE, height: TEXTURE_SIZE, depth_or_array_layers: 1 };
+        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("tissue texture"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let texels = tissue_texels();
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(TEXTURE_SIZE * 4),
+                rows_per_image: Some(TEXTURE_SIZE),
+            },
+            size,
+        );
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("tissue texture"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("tissue texture"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) },
+            ],
+        })
     }
 
     fn object_bind_group(
@@ -489,6 +670,17 @@ impl SceneRenderer {
     /// The colour format the pipelines were built for.
     pub fn format(&self) -> wgpu::TextureFormat {
         self.format
+    }
+
+    /// Colours, sizes and what is shown.
+    pub fn style(&self) -> &Style {
+        &self.style
+    }
+
+    /// Changes colours, sizes and what is shown (e.g. the regions toggled off); takes effect at the next
+    /// [`update`](Self::update).
+    pub fn set_style(&mut self, style: Style) {
+        self.style = style;
     }
 
     /// Targets and camera uniform for one view of `width` × `height` pixels.
@@ -527,22 +719,29 @@ impl SceneRenderer {
         self.layers.iter().map(|l| u64::from(l.index_count / 3)).sum()
     }
 
-    /// Uploads a snapshot. Vertex data is rewritten in place; index buffers are rebuilt only when a
-    /// layer's `topology_version` changes (or the layer is new); buffers are reallocated only on growth.
+    /// Uploads a snapshot. Vertex data is rewritten in place; index buffers, surface coordinates and
+    /// open edges are rebuilt only when a layer's `topology_version` changes (or the layer is new);
+    /// buffers are reallocated only on growth.
     pub fn update(&mut self, gpu: &Gpu, snapshot: &Snapshot) -> Result<(), RenderError> {
         let device = &gpu.device;
         let mut grown = 0u64;
         self.layers.truncate(snapshot.layers.len());
         while self.layers.len() < snapshot.layers.len() {
             let n = snapshot.layers[self.layers.len()].positions.len() as u64;
+            let vertex = wgpu::BufferUsages::VERTEX;
             self.layers.push(LayerGpu {
-                positions: GrowBuffer::new(device, "layer positions", wgpu::BufferUsages::VERTEX, n * 12),
-                normals: GrowBuffer::new(device, "layer normals", wgpu::BufferUsages::VERTEX, n * 12),
+                positions: GrowBuffer::new(device, "layer positions", vertex, n * 12),
+                normals: GrowBuffer::new(device, "layer normals", vertex, n * 12),
+                uv: GrowBuffer::new(device, "layer uv", vertex, n * 8),
                 indices: GrowBuffer::new(device, "layer indices", wgpu::BufferUsages::INDEX, n * 24),
                 index_count: 0,
                 vertex_count: 0,
                 max_index: 0,
                 topology_version: None,
+                edges: Vec::new(),
+                wall_positions: GrowBuffer::new(device, "wall positions", vertex, 12 * 6 * 64),
+                wall_normals: GrowBuffer::new(device, "wall normals", vertex, 12 * 6 * 64),
+                wall_vertex_count: 0,
             });
         }
         for (i, (layer, gpu_layer)) in snapshot.layers.iter().zip(self.layers.iter_mut()).enumerate() {
@@ -552,8 +751,14 @@ impl SceneRenderer {
                     what: format!("{} normals for {} positions", layer.normals.len(), layer.positions.len()),
                 });
             }
+            if !layer.uv.is_empty() && layer.uv.len() != layer.positions.len() {
+                return Err(RenderError::InvalidSnapshot {
+                    layer: i,
+                    what: format!("{} surface coordinates for {} positions", layer.uv.len(), layer.positions.len()),
+                });
+            }
             let vertex_count = layer.positions.len() as u32;
-            if gpu_layer.topology_version != Some(layer.topology_version) {
+            if gpu_layer.topology_version != Some(layer.topology_version) || gpu_layer.vertex_count != vertex_count {
                 let max_index = layer.triangles.iter().flatten().copied().max().unwrap_or(0);
                 if !layer.triangles.is_empty() && max_index >= vertex_count {
                     return Err(RenderError::InvalidSnapshot {
@@ -561,35 +766,83 @@ impl SceneRenderer {
                         what: format!("index {max_index} out of range for {vertex_count} vertices"),
                     });
                 }
-                grown += u64::from(gpu_layer.indices.write(gpu, bytemuck::cast_slice(&layer.triangles)));
-                self.stats.index_rebuilds += 1;
-                gpu_layer.index_count = layer.triangles.len() as u32 * 3;
-                gpu_layer.max_index = max_index;
-                gpu_layer.topology_version = Some(layer.topology_version);
-            } else if gpu_layer.index_count > 0 && gpu_layer.max_index >= vertex_count {
-                return Err(RenderError::InvalidSnapshot {
-                    layer: i,
-                    what: format!(
-                        "vertex count fell to {vertex_count} without a topology_version bump (index {})",
-                        gpu_layer.max_index
-                    ),
-                });
+                if gpu_layer.topology_version != Some(layer.topology_version) {
+                    grown += u64::from(gpu_layer.indices.write(gpu, bytemuck::cast_slice(&layer.triangles)));
+                    self.stats.index_rebuilds += 1;
+                    gpu_layer.index_count = layer.triangles.len() as u32 * 3;
+                    gpu_layer.max_index = max_index;
+                    gpu_layer.topology_version = Some(layer.topology_version);
+                    geometry::open_edges(layer, &mut self.edge_scratch, &mut gpu_layer.edges);
+                }
+                // Surface coordinates change only with the vertices (none given: all zero).
+                if layer.uv.is_empty() {
+                    let zeros = vec![[0.0f32; 2]; layer.positions.len()];
+                    grown += u64::from(gpu_layer.uv.write(gpu, bytemuck::cast_slice(&zeros)));
+                } else {
+                    grown += u64::from(gpu_layer.uv.write(gpu, bytemuck::cast_slice(&layer.uv)));
+                }
             }
             grown += u64::from(gpu_layer.positions.write(gpu, bytemuck::cast_slice(&layer.positions)));
             grown += u64::from(gpu_layer.normals.write(gpu, bytemuck::cast_slice(&layer.normals)));
             gpu_layer.vertex_count = vertex_count;
+            // Cut edges: walls down into the layer's thickness (the outer layer's inside is against
+            // its normal, a deeper layer's along it, away from the layer above).
+            let depth = if i == 0 { -layer.thickness } else { layer.thickness };
+            let (walls, wall_normals) = &mut self.wall_scratch;
+            geometry::edge_walls(layer, &gpu_layer.edges, depth, walls, wall_normals);
+            grown += u64::from(gpu_layer.wall_positions.write(gpu, bytemuck::cast_slice(walls)));
+            grown += u64::from(gpu_layer.wall_normals.write(gpu, bytemuck::cast_slice(wall_normals)));
+            gpu_layer.wall_vertex_count = walls.len() as u32;
         }
 
-        grown += u64::from(self.fibres.write(gpu, bytemuck::cast_slice(&snapshot.fibres)));
-        self.fibre_count = snapshot.fibres.len() as u32;
-        self.cut_scratch.clear();
-        self.cut_scratch.extend(snapshot.cut_path.windows(2).map(|w| [w[0], w[1]]));
-        grown += u64::from(self.cut.write(gpu, bytemuck::cast_slice(&self.cut_scratch)));
-        self.cut_count = self.cut_scratch.len() as u32;
+        let show_fibres = self.style.show_fibres;
+        let tear = snapshot.fibre_tear_stretch;
+        geometry::fibre_instances(
+            if show_fibres { &snapshot.fibres } else { &[] },
+            &snapshot.fibre_stretch,
+            &mut self.fibres.scratch,
+        );
+        geometry::broken_instances(
+            if show_fibres { &snapshot.broken_fibres } else { &[] },
+            tear,
+            &mut self.stubs.scratch,
+            &mut self.marks.scratch,
+        );
+        self.cut.scratch.clear();
+        self.cut.scratch.extend(
+            snapshot.cut_path.windows(2).map(|w| [w[0][0], w[0][1], w[0][2], w[1][0], w[1][1], w[1][2], 1.0]),
+        );
+        for lines in [&mut self.fibres, &mut self.stubs, &mut self.marks, &mut self.cut] {
+            grown += u64::from(lines.upload(gpu));
+        }
 
-        // Object uniforms: one slot per layer, then two instrument parts, fibres, cut path.
+        // What every view's camera uniform carries from the snapshot: lamp, shadow casters, regions.
+        let mut scene = SceneUniform {
+            lamp: Vec3::from(LAMP).normalize().extend(if self.style.shadows { SHADOW_STRENGTH } else { 0.0 }).into(),
+            ..SceneUniform::default()
+        };
+        for (k, pose) in snapshot.instrument.iter().chain(snapshot.clamped.iter()).take(2).enumerate() {
+            let [a, b] = caster(pose);
+            scene.casters[2 * k] = a;
+            scene.casters[2 * k + 1] = b;
+        }
+        if self.style.show_regions {
+            for (k, region) in snapshot.regions.iter().take(4).enumerate() {
+                let forbidden = region.kind == RegionKind::Forbidden;
+                let (shape, code) = match region.shape {
+                    RegionShape::Rect { u, v } => ([u[0], u[1], v[0], v[1]], 1.0),
+                    RegionShape::Disc { center, radius } => ([center[0], center[1], radius, 0.0], 3.0),
+                };
+                scene.regions[k] = shape;
+                scene.region_kinds[k] = code + if forbidden { 1.0 } else { 0.0 };
+            }
+        }
+        self.scene = scene;
+
+        // Object uniforms: a slot per layer, one per layer's walls, then the instrument parts, fibres,
+        // stubs, marks and cut path.
         let n = snapshot.layers.len();
-        let slots = n + 4;
+        let slots = 2 * n + MAX_PARTS + 4;
         let stride = self.object_stride as usize;
         let mut scratch = std::mem::take(&mut self.object_scratch);
         scratch.clear();
@@ -598,41 +851,66 @@ impl SceneRenderer {
             scratch[slot * stride..slot * stride + OBJECT_SIZE as usize]
                 .copy_from_slice(bytemuck::bytes_of(&object));
         };
-        let tissue = |color: [f32; 4]| ObjectUniform {
-            model: mat(Mat4::IDENTITY),
-            color,
-            params: [0.18, 24.0, 0.0, 0.0],
-        };
         for (i, layer) in snapshot.layers.iter().enumerate() {
-            put(i, tissue(layer.color));
+            let pattern = match layer.pattern {
+                SurfacePattern::Grain => 0.0,
+                SurfacePattern::Vessels => 1.0,
+                SurfacePattern::Plain => 2.0,
+            };
+            let repeats = layer.uv_size.map(|s| s / TEXTURE_TILE_M);
+            put(
+                i,
+                ObjectUniform {
+                    model: mat(Mat4::IDENTITY),
+                    color: layer.color,
+                    params: [0.35, 0.0, pattern, 0.0],
+                    extra: [repeats[0], repeats[1], 0.0, 0.0],
+                },
+            );
+            put(
+                n + i,
+                ObjectUniform {
+                    model: mat(Mat4::IDENTITY),
+                    color: wall_color(layer.color),
+                    params: [0.3, 40.0, 0.0, 0.0],
+                    extra: [0.0; 4],
+                },
+            );
         }
-        self.instrument = [None; 2];
-        if let Some(pose) = &snapshot.instrument {
+        self.instrument = [None; MAX_PARTS];
+        let poses = [snapshot.instrument, snapshot.clamped];
+        for (h, pose) in poses.iter().enumerate() {
+            let Some(pose) = pose else { continue };
             for (k, part) in mesh::instrument_parts(pose).into_iter().enumerate() {
                 let Some((part, model)) = part else { continue };
-                let color = if part == Part::ScalpelHandle {
-                    self.style.handle_color
+                let (color, steel) = if part == Part::ScalpelHandle {
+                    (self.style.handle_color, 0.0)
                 } else {
-                    self.style.steel_color
+                    (self.style.steel_color, 1.0)
                 };
                 put(
-                    n + k,
+                    2 * n + 2 * h + k,
                     ObjectUniform {
                         model: mat(model),
                         color: Vec3::from(color).extend(1.0).into(),
-                        params: [0.8, 60.0, 0.0, 0.0],
+                        params: [0.8, 60.0, steel, 0.0],
+                        extra: [0.0; 4],
                     },
                 );
-                self.instrument[k] = Some(part);
+                self.instrument[2 * h + k] = Some(part);
             }
         }
-        let line = |color: [f32; 3], width: f32| ObjectUniform {
+        let line = |color: [f32; 3], alpha: f32, width: f32, dots: bool, tear: f32| ObjectUniform {
             model: mat(Mat4::IDENTITY),
-            color: Vec3::from(color).extend(1.0).into(),
-            params: [0.0, 0.0, width, 0.0],
+            color: Vec3::from(color).extend(alpha).into(),
+            params: [if dots { 1.0 } else { 0.0 }, 0.0, width, tear],
+            extra: [0.0; 4],
         };
-        put(n + 2, line(self.style.fibre_color, self.style.fibre_width_px));
-        put(n + 3, line(self.style.cut_color, self.style.cut_width_px));
+        let base = 2 * n + MAX_PARTS;
+        put(base, line(self.style.fibre_color, 1.0, self.style.fibre_width_px, false, tear));
+        put(base + 1, line(self.style.fibre_color, 1.0, self.style.fibre_width_px, false, tear));
+        put(base + 2, line(self.style.mark_color, 0.85, self.style.mark_width_px, true, 0.0));
+        put(base + 3, line(self.style.cut_color, 1.0, self.style.cut_width_px, false, 0.0));
         let grew = self.objects.write(gpu, &scratch);
         self.object_scratch = scratch;
         self.stats.reallocations += grown + u64::from(grew);
@@ -686,6 +964,7 @@ impl SceneRenderer {
             eye: camera.eye().extend(1.0).into(),
             light: light.extend(0.0).into(),
             viewport: [w, h, if self.format.is_srgb() { 0.0 } else { 1.0 }, line_scale],
+            scene: self.scene,
         };
         gpu.queue.write_buffer(&view.camera_buffer, 0, bytemuck::bytes_of(&uniform));
 
@@ -718,10 +997,11 @@ impl SceneRenderer {
         });
         pass.set_viewport(x, y, w, h, 0.0, 1.0);
         pass.set_bind_group(0, &view.camera_bind_group, &[]);
+        pass.set_bind_group(2, &self.texture_bind_group, &[]);
 
         let n = self.layers.len();
         let offset = |slot: usize| (slot as u64 * self.object_stride) as u32;
-        pass.set_pipeline(&self.mesh_pipeline);
+        pass.set_pipeline(&self.tissue_pipeline);
         for (i, layer) in self.layers.iter().enumerate() {
             if layer.index_count == 0 || layer.vertex_count == 0 {
                 continue;
@@ -729,34 +1009,49 @@ impl SceneRenderer {
             pass.set_bind_group(1, &self.object_bind_group, &[offset(i)]);
             pass.set_vertex_buffer(0, layer.positions.buffer.slice(..u64::from(layer.vertex_count) * 12));
             pass.set_vertex_buffer(1, layer.normals.buffer.slice(..u64::from(layer.vertex_count) * 12));
+            pass.set_vertex_buffer(2, layer.uv.buffer.slice(..u64::from(layer.vertex_count) * 8));
             pass.set_index_buffer(layer.indices.buffer.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..layer.index_count, 0, 0..1);
+        }
+        pass.set_pipeline(&self.solid_pipeline);
+        for (i, layer) in self.layers.iter().enumerate() {
+            if layer.wall_vertex_count == 0 {
+                continue;
+            }
+            let bytes = u64::from(layer.wall_vertex_count) * 12;
+            pass.set_bind_group(1, &self.object_bind_group, &[offset(n + i)]);
+            pass.set_vertex_buffer(0, layer.wall_positions.buffer.slice(..bytes));
+            pass.set_vertex_buffer(1, layer.wall_normals.buffer.slice(..bytes));
+            pass.draw(0..layer.wall_vertex_count, 0..1);
         }
         for (k, part) in self.instrument.iter().enumerate() {
             let Some(part) = part else { continue };
             let Some(index) = Part::ALL.iter().position(|p| p == part) else { continue };
             let Some(gpu_part) = self.parts.get(index) else { continue };
-            pass.set_bind_group(1, &self.object_bind_group, &[offset(n + k)]);
+            pass.set_bind_group(1, &self.object_bind_group, &[offset(2 * n + k)]);
             pass.set_vertex_buffer(0, gpu_part.positions.slice(..));
             pass.set_vertex_buffer(1, gpu_part.normals.slice(..));
             pass.set_index_buffer(gpu_part.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..gpu_part.index_count, 0, 0..1);
         }
-        if self.fibre_count > 0 {
-            pass.set_pipeline(&self.line_pipeline);
-            pass.set_bind_group(1, &self.object_bind_group, &[offset(n + 2)]);
-            pass.set_vertex_buffer(0, self.fibres.buffer.slice(..u64::from(self.fibre_count) * 24));
-            pass.draw(0..6, 0..self.fibre_count);
-        }
+        let base = 2 * n + MAX_PARTS;
+        let instance_bytes = std::mem::size_of::<LineInstance>() as u64;
+        let draw_lines = |pass: &mut wgpu::RenderPass<'_>, lines: &LinesGpu, slot: usize| {
+            if lines.count > 0 {
+                pass.set_bind_group(1, &self.object_bind_group, &[offset(slot)]);
+                pass.set_vertex_buffer(0, lines.buffer.buffer.slice(..u64::from(lines.count) * instance_bytes));
+                pass.draw(0..6, 0..lines.count);
+            }
+        };
+        pass.set_pipeline(&self.line_pipeline);
+        draw_lines(&mut pass, &self.fibres, base);
+        draw_lines(&mut pass, &self.stubs, base + 1);
         // The background last, depth-tested at the far plane, so covered pixels cost nothing (a software
         // rasteriser pays for every shaded fragment).
         pass.set_pipeline(&self.background_pipeline);
         pass.draw(0..3, 0..1);
-        if self.cut_count > 0 {
-            pass.set_pipeline(&self.overlay_line_pipeline);
-            pass.set_bind_group(1, &self.object_bind_group, &[offset(n + 3)]);
-            pass.set_vertex_buffer(0, self.cut.buffer.slice(..u64::from(self.cut_count) * 24));
-            pass.draw(0..6, 0..self.cut_count);
-        }
+        pass.set_pipeline(&self.overlay_line_pipeline);
+        draw_lines(&mut pass, &self.marks, base + 2);
+        draw_lines(&mut pass, &self.cut, base + 3);
     }
 }

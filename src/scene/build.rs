@@ -59,6 +59,10 @@ impl Scene {
 
     /// Builds the world the scene describes.
     pub fn build_world(&self, interactive: bool) -> Result<World, TissueError> {
-        World::build(&self.tissue_spec()?, self.world_config(interactive))
+        let mut world = World::build(&self.tissue_spec()?, self.world_config(interactive))?;
+        if let Some(goals) = &self.goals {
+            world.set_regions(goals.surface_regions());
+        }
+        Ok(world)
     }
 }

@@ -276,12 +276,12 @@ impl Scene {
         }
     }
 
-    /// The trainee's camera: as given, or in front of and above the tissue, looking at its centre from
-    /// about 3 radii away (45° field of view).
+    /// The trainee's camera: as given, or in front of and above the tissue, looking down at its centre
+    /// at about 50° from about 1.5 radii away (45° field of view), so the tissue fills most of the view.
     pub fn trainee_camera(&self) -> CameraSpec {
         self.cameras.trainee.unwrap_or_else(|| {
             let (c, r) = self.bounds();
-            CameraSpec { eye: [c[0], c[1] + 2.0 * r, c[2] + 2.4 * r], target: c, ..CameraSpec::default() }
+            CameraSpec { eye: [c[0], c[1] + 1.15 * r, c[2] + 0.95 * r], target: c, ..CameraSpec::default() }
         })
     }
 

@@ -12,4 +12,7 @@ pub use command::Command;
 pub use world::{PHASES, StepCounters, World, WorldConfig};
 
 // The snapshot vocabulary lives one floor down, in `crate::snapshot`; re-exported for the app side.
-pub use crate::snapshot::{CameraSpec, InstrumentKind, InstrumentPose, LayerMesh, Snapshot};
+pub use crate::snapshot::{
+    BrokenFibre, CameraSpec, InstrumentKind, InstrumentPose, LayerMesh, RegionKind, RegionShape, Snapshot,
+    SurfacePattern, SurfaceRegion,
+};

@@ -9,7 +9,7 @@ use web_time::Instant;
 use super::{Command, FixedClock};
 use crate::chainmail::{ElementId, RelaxBudget};
 use crate::instrument::{Command as InstrumentCommand, GRASP_REACH, Hit, Instrument, PROBE_RADIUS};
-use crate::snapshot::{InstrumentKind, Snapshot};
+use crate::snapshot::{InstrumentKind, InstrumentPose, Snapshot, SurfaceRegion};
 use crate::tissue::{CutSegment, Tissue, TissueError, TissueSpec};
 
 /// The phases of a step, in the order they run.
@@ -87,6 +87,11 @@ pub struct World {
     step: u64,
     last: StepCounters,
     elements_moved_total: u64,
+    /// The regions of the exercise, copied into every snapshot for drawing.
+    regions: Vec<SurfaceRegion>,
+    /// Axis and roll of the forceps when another instrument was taken up while they held the tissue
+    /// (they are drawn clamped where they were left).
+    clamp_axis: ([f32; 3], f32),
 }
 
 fn ms(t: Instant) -> f32 {
@@ -105,6 +110,8 @@ impl World {
             step: 0,
             last: StepCounters::default(),
             elements_moved_total: 0,
+            regions: Vec::new(),
+            clamp_axis: ([0.0, 1.0, 0.0], 0.0),
         }
     }
 
@@ -199,6 +206,11 @@ impl World {
     /// Commands queued for the next step (what a recorder writes down).
     pub fn pending(&self) -> &[Command] {
         &self.commands
+    }
+
+    /// Sets the regions drawn on the tissue (the exercise's target and forbidden areas).
+    pub fn set_regions(&mut self, regions: Vec<SurfaceRegion>) {
+        self.regions = regions;
     }
 
     /// Queues a command for the next step (an instrument command or a world command).
@@ -314,6 +326,9 @@ impl World {
                 // teasing apart); taking the forceps back takes up the grasp where it is.
                 self.instrument.cutting = false;
                 self.instrument.stroke.clear();
+                if self.instrument.kind == InstrumentKind::Forceps && kind != InstrumentKind::Forceps {
+                    self.clamp_axis = (self.instrument.axis, self.instrument.roll);
+                }
                 self.instrument.kind = kind;
                 if kind == InstrumentKind::Forceps
                     && let Some(p) = self.instrument.grasped.and_then(|e| self.tissue.world_position(e))
@@ -396,8 +411,17 @@ impl World {
     pub fn snapshot_into(&self, out: &mut Snapshot) {
         out.step = self.step;
         self.tissue.fill_meshes(&mut out.layers);
-        self.tissue.fill_fibres(&mut out.fibres);
+        self.tissue.fill_fibres(&mut out.fibres, &mut out.fibre_stretch, &mut out.broken_fibres);
+        out.fibre_tear_stretch = self.tissue.fibre_tear_stretch();
         out.instrument = Some(self.instrument.pose());
+        out.clamped = None;
+        if self.instrument.kind != InstrumentKind::Forceps
+            && let Some(tip) = self.instrument.grasped.and_then(|e| self.tissue.world_position(e))
+        {
+            let (axis, roll) = self.clamp_axis;
+            out.clamped = Some(InstrumentPose { kind: InstrumentKind::Forceps, tip, axis, roll, closed: true });
+        }
+        out.regions.clone_from(&self.regions);
         out.cut_path.clear();
         if self.instrument.cutting {
             out.cut_path.extend_from_slice(&self.instrument.stroke);

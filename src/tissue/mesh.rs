@@ -1,9 +1,14 @@
 //! What the tissue looks like: world-space triangle meshes per layer (triangles that span a broken link
 //! left out, so a cut opens as a gap), the connective fibres as segments, refilled in place.
 
-use super::{LinkKind, Tissue};
-use crate::chainmail::LinkId;
-use crate::snapshot::LayerMesh;
+use super::{Geometry, LinkKind, Tissue};
+use crate::chainmail::{BreakReason, LinkId};
+use crate::snapshot::{BrokenFibre, LayerMesh, SurfacePattern};
+
+/// Drawn thickness of the outermost layer (a dura is about half a millimetre to a millimetre), metres.
+const OUTER_THICKNESS: f32 = 0.0006;
+/// Drawn thickness of the layers under it (an arachnoid is thinner), metres.
+const INNER_THICKNESS: f32 = 0.0003;
 
 impl Tissue {
     /// Refills `out` with one mesh per layer, the upper layer first. Buffers are reused; triangles are
@@ -14,11 +19,21 @@ impl Tissue {
         while out.len() < nl {
             out.push(LayerMesh { topology_version: u64::MAX, ..LayerMesh::default() });
         }
-        for (slot, layer) in out.iter_mut().zip(&self.layers) {
+        let volume = matches!(self.geometry, Geometry::Volume) || self.fem.is_some();
+        for (k, (slot, layer)) in out.iter_mut().zip(&self.layers).enumerate() {
             if slot.name != layer.name {
                 slot.name.clone_from(&layer.name);
             }
             slot.color = layer.color;
+            let outer = k == 0;
+            slot.thickness = if outer { OUTER_THICKNESS } else { INNER_THICKNESS };
+            slot.pattern = match (volume, outer) {
+                (true, _) => SurfacePattern::Plain,
+                (false, true) => SurfacePattern::Grain,
+                (false, false) => SurfacePattern::Vessels,
+            };
+            let k2 = if volume { 2 } else { 1 };
+            slot.uv_size = [self.extent_span[0].abs(), self.extent_span[k2].abs()];
             let first = layer.first as usize;
             let n = layer.count as usize;
             slot.positions.clear();
@@ -62,6 +77,23 @@ impl Tissue {
                 }
                 slot.topology_version = self.topology_version;
             }
+            if slot.uv.len() != slot.positions.len() {
+                // Rest positions never change: the surface coordinates are filled once.
+                let rest = &self.body.lattice().rest_positions()[first..first + n];
+                slot.uv.clear();
+                slot.uv.extend(rest.iter().map(|&r| {
+                    let (u, v) = self.surface_fractions(r);
+                    [u, v]
+                }));
+                for cap in &layer.caps {
+                    let m = cap.ring.len().max(1) as f32;
+                    let sum = cap.ring.iter().fold([0.0f32; 2], |acc, &e| {
+                        let uv = slot.uv[(e - layer.first) as usize];
+                        [acc[0] + uv[0], acc[1] + uv[1]]
+                    });
+                    slot.uv.push([sum[0] / m, sum[1] / m]);
+                }
+            }
             slot.normals.clear();
             slot.normals.resize(slot.positions.len(), [0.0; 3]);
             for t in &slot.triangles {
@@ -80,26 +112,55 @@ impl Tissue {
                     m[2] += f[2];
                 }
             }
-            for m in &mut slot.normals {
-                let l = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
-                *m = if l > 0.0 { [m[0] / l, m[1] / l, m[2] / l] } else { [0.0, 1.0, 0.0] };
+            normalize_all(&mut slot.normals);
+        }
+    }
+
+    /// Refills `out` with the intact connective fibres as world-space segments (the lower layer's end
+    /// first), `stretch` with each one's world stretch, and `broken` with the fibres cut or torn.
+    pub fn fill_fibres(
+        &self,
+        out: &mut Vec<[[f32; 3]; 2]>,
+        stretch: &mut Vec<f32>,
+        broken: &mut Vec<BrokenFibre>,
+    ) {
+        out.clear();
+        stretch.clear();
+        broken.clear();
+        for (l, kind) in self.link_kind.iter().enumerate() {
+            let id = LinkId(l as u32);
+            if *kind != LinkKind::Connective {
+                continue;
+            }
+            let Some([a, b]) = self.body.lattice().link_ends(id) else { continue };
+            let (a, b) = if self.layer_of(a) < self.layer_of(b) { (b, a) } else { (a, b) };
+            let (Some(pa), Some(pb)) = (self.world_position(a), self.world_position(b)) else { continue };
+            match self.body.link_broken(id) {
+                None => {
+                    out.push([pa, pb]);
+                    let d = ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2) + (pb[2] - pa[2]).powi(2))
+                        .sqrt();
+                    stretch.push(d / self.rest_len[l].max(f32::MIN_POSITIVE));
+                }
+                Some(reason) => broken.push(BrokenFibre { ends: [pa, pb], cut: reason == BreakReason::Cut }),
             }
         }
     }
 
-    /// Refills `out` with the intact connective fibres as world-space segments.
-    pub fn fill_fibres(&self, out: &mut Vec<[[f32; 3]; 2]>) {
-        out.clear();
+    /// The stretch at which connective fibres tear (the largest tear ratio of their materials), `0`
+    /// when they never tear or there are none.
+    pub fn fibre_tear_stretch(&self) -> f32 {
+        let mut ratio = 0.0f32;
         for (l, kind) in self.link_kind.iter().enumerate() {
-            let id = LinkId(l as u32);
-            if *kind != LinkKind::Connective || !self.body.link_intact(id) {
+            if *kind != LinkKind::Connective {
                 continue;
             }
-            let Some([a, b]) = self.body.lattice().link_ends(id) else { continue };
-            if let (Some(pa), Some(pb)) = (self.world_position(a), self.world_position(b)) {
-                out.push([pa, pb]);
+            let m = self.body.link_material(LinkId(l as u32)).and_then(|m| self.body.material(m));
+            if let Some(r) = m.and_then(|m| m.tear_ratio) {
+                ratio = ratio.max(r);
             }
         }
+        ratio
     }
 
     /// Connected components of the graph of intact links within one layer (0 is the upper), for tests
@@ -131,5 +192,12 @@ impl Tissue {
             }
         }
         components
+    }
+}
+
+fn normalize_all(normals: &mut [[f32; 3]]) {
+    for m in normals {
+        let l = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+        *m = if l > 0.0 { [m[0] / l, m[1] / l, m[2] / l] } else { [0.0, 1.0, 0.0] };
     }
 }

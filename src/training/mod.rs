@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::chainmail::LinkId;
 use crate::simulation::World;
+use crate::snapshot::{RegionKind, RegionShape, SurfaceRegion};
 use crate::tissue::{LinkKind, Tissue};
 
 /// A region of the tissue's surface, in fractions of the `u` and `v` extents (`0` to `1`).
@@ -41,6 +42,14 @@ impl Region {
             Region::Disc { center: (cu, cv), radius } => {
                 (u - cu).powi(2) + (v - cv).powi(2) <= radius * radius
             }
+        }
+    }
+
+    /// The same region as the snapshot carries it for drawing.
+    pub fn shape(&self) -> RegionShape {
+        match *self {
+            Region::Rect { u, v } => RegionShape::Rect { u: [u.0, u.1], v: [v.0, v.1] },
+            Region::Disc { center, radius } => RegionShape::Disc { center: [center.0, center.1], radius },
         }
     }
 
@@ -80,6 +89,19 @@ pub struct Goals {
     /// Time allowed, seconds. Default: none.
     #[serde(default)]
     pub time_limit_s: Option<f32>,
+}
+
+impl Goals {
+    /// The target and the forbidden regions, to be drawn on the tissue.
+    pub fn surface_regions(&self) -> Vec<SurfaceRegion> {
+        std::iter::once(SurfaceRegion { kind: RegionKind::Target, shape: self.target.shape() })
+            .chain(
+                self.forbidden
+                    .iter()
+                    .map(|r| SurfaceRegion { kind: RegionKind::Forbidden, shape: r.shape() }),
+            )
+            .collect()
+    }
 }
 
 fn default_stretch_limit() -> f32 {

@@ -14,6 +14,7 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("middle drag, shift + right drag", "pan the camera"),
     ("wheel", "zoom (when no instrument is held down)"),
     ("Home", "reset the cameras"),
+    ("G", "show or hide the target and forbidden regions on the tissue"),
     ("F5", "reload the scene"),
     ("F12 / P", "save both views as PNG"),
     ("R", "write the session report"),

@@ -56,6 +56,8 @@ pub enum Action {
     ToggleHelp,
     /// Put the cameras back where the scene has them.
     ResetCameras,
+    /// Show or hide the exercise's regions drawn on the tissue.
+    ToggleRegions,
 }
 
 /// Everything a panel may read in one frame.
