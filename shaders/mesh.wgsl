@@ -15,7 +15,19 @@ struct VsOut {
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
+    // Signed distances (surface fractions) to the nearest target and forbidden region's edge, negative
+    // inside; large when there is none. Interpolated: exact along straight edges, rounded at corners.
+    @location(3) region: vec2<f32>,
 };
+
+// Signed distance from uv to region k's edge (negative inside).
+fn region_distance(k: i32, uv: vec2<f32>) -> f32 {
+    let r = camera.regions[k];
+    if camera.region_kinds[k] > 2.5 {
+        return length(uv - r.xy) - r.z;
+    }
+    return max(max(r.x - uv.x, uv.x - r.y), max(r.z - uv.y, uv.y - r.w));
+}
 
 @vertex
 fn vs_tissue(
@@ -28,6 +40,22 @@ fn vs_tissue(
     out.normal = normal;
     out.uv = uv;
     out.clip = camera.view_proj * vec4<f32>(position, 1.0);
+    // Regions per vertex: the loop runs once per vertex, not per pixel.
+    var target_d = 10.0;
+    var forbidden_d = 10.0;
+    for (var k = 0; k < 4; k = k + 1) {
+        let kind = camera.region_kinds[k];
+        if kind < 0.5 {
+            continue;
+        }
+        let d = region_distance(k, uv);
+        if kind > 1.5 && kind < 2.5 || kind > 3.5 {
+            forbidden_d = min(forbidden_d, d);
+        } else {
+            target_d = min(target_d, d);
+        }
+    }
+    out.region = vec2<f32>(target_d, forbidden_d);
     return out;
 }
 
@@ -38,6 +66,7 @@ fn vs_solid(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) ->
     out.world = world.xyz;
     out.normal = (object.model * vec4<f32>(normal, 0.0)).xyz;
     out.uv = vec2<f32>(0.0);
+    out.region = vec2<f32>(10.0);
     out.clip = camera.view_proj * world;
     return out;
 }
@@ -45,62 +74,53 @@ fn vs_solid(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) ->
 // Light from the lamp reaching `p` past one capsule (a = tip and radius, b = end and use flag): 1 in
 // the open, down to 0 in the core of the shadow; the penumbra widens with the distance to the caster.
 fn capsule_light(p: vec3<f32>, l: vec3<f32>, a: vec4<f32>, b: vec4<f32>) -> f32 {
-    if b.w < 0.5 {
-        return 1.0;
-    }
     // Closest approach between the ray p + t l (t > 0) and the segment a.xyz + s (b.xyz - a.xyz).
     let d = b.xyz - a.xyz;
     let w = p - a.xyz;
-    let dd = dot(d, d);
     let dl = dot(d, l);
-    let wd = dot(w, d);
     let wl = dot(w, l);
-    let den = max(dd - dl * dl, 1e-12);
-    let s = clamp((wd - dl * wl) / den, 0.0, 1.0);
-    let q = a.xyz + s * d;
-    let t = dot(q - p, l);
-    if t <= 0.0 {
-        return 1.0;
-    }
-    let gap = length(p + t * l - q);
-    let soft = a.w * 0.6 + 0.18 * t;
-    return smoothstep(a.w * 0.5, a.w * 0.5 + soft, gap);
+    let den = max(dot(d, d) - dl * dl, 1e-12);
+    let s = clamp((dot(w, d) - dl * wl) / den, 0.0, 1.0);
+    let q = w - s * d;
+    let t = -dot(q, l);
+    let gap = length(q + t * l);
+    let r = a.w * 0.5;
+    let lit = clamp((gap - r) / (a.w * 0.6 + 0.18 * max(t, 0.0)), 0.0, 1.0);
+    return select(1.0, lit, t > 0.0 && b.w > 0.5);
 }
 
 fn shadow(p: vec3<f32>) -> f32 {
+    if camera.lamp.w <= 0.0 || camera.casters[1].w < 0.5 {
+        return 1.0;
+    }
     let l = camera.lamp.xyz;
-    let lit = capsule_light(p, l, camera.casters[0], camera.casters[1])
-        * capsule_light(p, l, camera.casters[2], camera.casters[3]);
+    var lit = capsule_light(p, l, camera.casters[0], camera.casters[1]);
+    if camera.casters[3].w > 0.5 {
+        lit = lit * capsule_light(p, l, camera.casters[2], camera.casters[3]);
+    }
     return mix(1.0, lit, camera.lamp.w);
 }
 
-// 1 inside an outline band `width` pixels wide along the edge of region k, 0 elsewhere; `inside` is set
-// to whether uv lies in it.
-fn region_edge(k: i32, uv: vec2<f32>, px: vec2<f32>) -> vec2<f32> {
-    let r = camera.regions[k];
-    let kind = camera.region_kinds[k];
-    var dist = 0.0;
-    if kind > 2.5 {
-        // Disc: signed distance in pixels through the uv derivative.
-        let e = (length(uv - r.xy) - r.z) / max(length(px), 1e-9);
-        dist = e;
-    } else {
-        let du = max(r.x - uv.x, uv.x - r.y) / max(px.x, 1e-9);
-        let dv = max(r.z - uv.y, uv.y - r.w) / max(px.y, 1e-9);
-        dist = max(du, dv);
-    }
-    let band = 1.0 - smoothstep(1.0, 2.2, abs(dist + 1.5));
-    return vec2<f32>(band, select(0.0, 1.0, dist < 0.0));
+// An outline about two pixels wide along the zero of a signed distance, from its screen derivative.
+fn outline(d: f32) -> f32 {
+    let px = abs(d) / max(fwidth(d), 1e-9);
+    return clamp(2.5 - px, 0.0, 1.0);
+}
+
+// x to the powers 16 and 64, by squaring (cheaper than pow on a software rasteriser).
+fn pow16(x: f32) -> f32 {
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    let x8 = x4 * x4;
+    return x8 * x8;
 }
 
 @fragment
 fn fs_tissue(in: VsOut) -> @location(0) vec4<f32> {
     let v = normalize(camera.eye.xyz - in.world);
-    var n = in.normal;
-    let len = length(n);
-    n = select(v, n / len, len > 1e-6);
-    let back = dot(n, v) < 0.0;
-    n = select(n, -n, back);
+    var n = normalize(in.normal);
+    let nv = dot(n, v);
+    n = select(n, -n, nv < 0.0);
 
     // Texture: grain (r), vessels (g), capillaries (b), mottle (a).
     let tex = textureSample(tissue_texture, tissue_sampler, in.uv * object.extra.xy);
@@ -117,47 +137,37 @@ fn fs_tissue(in: VsOut) -> @location(0) vec4<f32> {
         base = mix(base, vec3<f32>(0.42, 0.03, 0.05), vessel * 0.85);
         wet = 1.0 + 0.5 * tex.g;
     }
-    base = base * select(1.0, 0.72, back);
+    base = base * select(1.0, 0.72, nv < 0.0);
 
     let shade = shadow(in.world);
     let lamp = camera.lamp.xyz;
     let head = camera.light.xyz;
     // Wrapped diffuse: light bleeds a little past the terminator, as under a thin wet membrane.
-    let wrap = 0.35;
-    let d_lamp = max((dot(n, lamp) + wrap) / (1.0 + wrap), 0.0);
-    let d_head = max((dot(n, head) + wrap) / (1.0 + wrap), 0.0);
+    let d_lamp = clamp(dot(n, lamp) * 0.74 + 0.26, 0.0, 1.0);
+    let nh = dot(n, head);
+    let d_head = clamp(nh * 0.74 + 0.26, 0.0, 1.0);
     // Subsurface tint: light scattered inside comes out redder, most where it grazes the surface.
-    let graze = 1.0 - abs(dot(n, head));
+    let graze = 1.0 - abs(nh);
     let sss = vec3<f32>(0.9, 0.25, 0.18) * (0.1 + 0.16 * graze * graze);
-    // Wet: a tight highlight over a broad sheen, both stronger at grazing angles (Fresnel).
-    let fres = 0.04 + 0.96 * pow(1.0 - max(dot(n, v), 0.0), 5.0);
-    let h_lamp = normalize(lamp + v);
-    let h_head = normalize(head + v);
-    let tight = pow(max(dot(n, h_lamp), 0.0), 90.0) * shade + pow(max(dot(n, h_head), 0.0), 120.0) * 0.7;
-    let sheen = pow(max(dot(n, h_head), 0.0), 14.0);
-    let spec = object.params.x * wet * (tight * 0.8 + sheen * 0.08) + 0.12 * fres;
+    // Wet: a tight lamp highlight (power 64) over a broad sheen (power 16), and a Fresnel rim.
+    let c = 1.0 - abs(nv);
+    let c2 = c * c;
+    let fres = 0.04 + 0.96 * c2 * c2 * c;
+    let hl = max(dot(n, normalize(lamp + v)), 0.0);
+    let h16 = pow16(hl);
+    let tight = h16 * h16 * h16 * h16 * shade;
+    let sheen = pow16(max(nh, 0.0));
+    let spec = object.params.x * wet * (tight * 0.8 + sheen * 0.1) + 0.12 * fres;
 
-    var lit = base * (0.16 + 0.62 * d_lamp * shade + 0.34 * d_head) + base * sss + vec3<f32>(spec);
+    var lit = base * (0.16 + 0.62 * d_lamp * shade + 0.34 * d_head + sss) + vec3<f32>(spec);
 
-    // Regions: a tint inside and an outline a few pixels wide (pixel widths from the uv derivatives).
-    let px = fwidth(in.uv);
-    for (var k = 0; k < 4; k = k + 1) {
-        let kind = camera.region_kinds[k];
-        if kind < 0.5 {
-            continue;
-        }
-        let e = region_edge(k, in.uv, px);
-        let forbidden = kind > 1.5 && kind < 2.5 || kind > 3.5;
-        if forbidden {
-            // Hatched: diagonal stripes in surface fractions, pixel-independent.
-            let stripe = step(0.5, fract((in.uv.x + in.uv.y) * 60.0));
-            lit = mix(lit, vec3<f32>(0.55, 0.05, 0.6), e.y * (0.12 + 0.16 * stripe));
-            lit = mix(lit, vec3<f32>(0.85, 0.2, 0.95), e.x * 0.85);
-        } else {
-            lit = mix(lit, vec3<f32>(0.35, 0.9, 0.55), e.y * 0.1);
-            lit = mix(lit, vec3<f32>(0.2, 0.95, 0.5), e.x * 0.85);
-        }
-    }
+    // Regions: a tint inside and an outline; the forbidden one hatched.
+    let inside = step(in.region, vec2<f32>(0.0));
+    let stripe = step(0.5, fract((in.uv.x + in.uv.y) * 60.0));
+    lit = mix(lit, vec3<f32>(0.35, 0.9, 0.55), inside.x * 0.1);
+    lit = mix(lit, vec3<f32>(0.55, 0.05, 0.6), inside.y * (0.12 + 0.16 * stripe));
+    lit = mix(lit, vec3<f32>(0.2, 0.95, 0.5), outline(in.region.x) * 0.85);
+    lit = mix(lit, vec3<f32>(0.85, 0.2, 0.95), outline(in.region.y) * 0.85);
     return output(lit, 1.0);
 }
 

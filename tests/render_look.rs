@@ -78,7 +78,9 @@ fn check_golden(name: &str, image: &image::RgbaImage) {
     }
     let golden = match image::open(&golden_path) {
         Ok(g) => g.to_rgba8(),
-        Err(e) => panic!("no golden at {} ({e}); run with DISSECT_BLESS=1 and look at it", golden_path.display()),
+        Err(e) => {
+            panic!("no golden at {} ({e}); run with DISSECT_BLESS=1 and look at it", golden_path.display())
+        }
     };
     assert_eq!(golden.dimensions(), image.dimensions(), "{name}: golden has another size");
     let fraction = fraction_differing(image, &golden, CHANNEL_TOLERANCE);

@@ -408,7 +408,11 @@ fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action:
             let mut style = *state.renderer.style();
             style.show_regions = !style.show_regions;
             state.renderer.set_style(style);
-            session.say(if style.show_regions { "regions shown (G hides them)" } else { "regions hidden (G shows them)" });
+            session.say(if style.show_regions {
+                "regions shown (G hides them)"
+            } else {
+                "regions hidden (G shows them)"
+            });
         }
         Action::ResetCameras => {
             state.trainee.camera.reset();

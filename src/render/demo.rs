@@ -5,7 +5,8 @@
 use std::f32::consts::PI;
 
 use crate::snapshot::{
-    InstrumentKind, InstrumentPose, LayerMesh, RegionKind, RegionShape, Snapshot, SurfacePattern, SurfaceRegion,
+    InstrumentKind, InstrumentPose, LayerMesh, RegionKind, RegionShape, Snapshot, SurfacePattern,
+    SurfaceRegion,
 };
 
 /// Side of the square the sheets cover, metres.
@@ -74,8 +75,14 @@ pub fn two_layers(nu: u32, nv: u32, fibre_step: u32) -> Snapshot {
             closed: false,
         }),
         regions: vec![
-            SurfaceRegion { kind: RegionKind::Target, shape: RegionShape::Rect { u: [0.3, 0.7], v: [0.3, 0.7] } },
-            SurfaceRegion { kind: RegionKind::Forbidden, shape: RegionShape::Rect { u: [0.0, 1.0], v: [0.88, 1.0] } },
+            SurfaceRegion {
+                kind: RegionKind::Target,
+                shape: RegionShape::Rect { u: [0.3, 0.7], v: [0.3, 0.7] },
+            },
+            SurfaceRegion {
+                kind: RegionKind::Forbidden,
+                shape: RegionShape::Rect { u: [0.0, 1.0], v: [0.88, 1.0] },
+            },
         ],
         fibre_tear_stretch: 4.0,
         ..Snapshot::default()

@@ -201,7 +201,11 @@ struct LinesGpu {
 impl LinesGpu {
     fn new(device: &wgpu::Device, label: &'static str) -> Self {
         let bytes = std::mem::size_of::<LineInstance>() as u64 * 256;
-        Self { buffer: GrowBuffer::new(device, label, wgpu::BufferUsages::VERTEX, bytes), count: 0, scratch: Vec::new() }
+        Self {
+            buffer: GrowBuffer::new(device, label, wgpu::BufferUsages::VERTEX, bytes),
+            count: 0,
+            scratch: Vec::new(),
+        }
     }
 
     /// Uploads the scratch instances; returns whether the buffer grew.
@@ -416,16 +420,20 @@ impl SceneRenderer {
         let lines_module = module("lines.wgsl", LINES_WGSL);
         let background_module = module("background.wgsl", BACKGROUND_WGSL);
 
-        let attr = |location, format| {
-            [wgpu::VertexAttribute { format, offset: 0, shader_location: location }]
-        };
+        let attr =
+            |location, format| [wgpu::VertexAttribute { format, offset: 0, shader_location: location }];
         let pos_attr = attr(0, wgpu::VertexFormat::Float32x3);
         let nrm_attr = attr(1, wgpu::VertexFormat::Float32x3);
         let uv_attr = attr(2, wgpu::VertexFormat::Float32x2);
         let per_vertex = |stride, attributes| {
-            Some(wgpu::VertexBufferLayout { array_stride: stride, step_mode: wgpu::VertexStepMode::Vertex, attributes })
+            Some(wgpu::VertexBufferLayout {
+                array_stride: stride,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes,
+            })
         };
-        let tissue_buffers = [per_vertex(12, &pos_attr[..]), per_vertex(12, &nrm_attr[..]), per_vertex(8, &uv_attr[..])];
+        let tissue_buffers =
+            [per_vertex(12, &pos_attr[..]), per_vertex(12, &nrm_attr[..]), per_vertex(8, &uv_attr[..])];
         let solid_buffers = [per_vertex(12, &pos_attr[..]), per_vertex(12, &nrm_attr[..])];
         let segment_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32];
         let line_buffers = [Some(wgpu::VertexBufferLayout {
@@ -442,7 +450,8 @@ impl SceneRenderer {
                 bias: wgpu::DepthBiasState::default(),
             })
         };
-        let opaque = [Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
+        let opaque =
+            [Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
         let blended = [Some(wgpu::ColorTargetState {
             format,
             blend: Some(wgpu::BlendState::ALPHA_BLENDING),
@@ -629,8 +638,10 @@ impl SceneRenderer {
             label: Some("tissue texture"),
             address_mode_u: wgpu::AddressMode::Repeat,
             address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
+            // Nearest texels: at the usual zoom a texel is about a pixel, and a software rasteriser
+            // fetches one texel instead of four.
+            mag_filter: wgpu::FilterMode::Nearest,
+            min_filter: wgpu::FilterMode::Nearest,
             ..Default::default()
         });
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -754,11 +765,17 @@ impl SceneRenderer {
             if !layer.uv.is_empty() && layer.uv.len() != layer.positions.len() {
                 return Err(RenderError::InvalidSnapshot {
                     layer: i,
-                    what: format!("{} surface coordinates for {} positions", layer.uv.len(), layer.positions.len()),
+                    what: format!(
+                        "{} surface coordinates for {} positions",
+                        layer.uv.len(),
+                        layer.positions.len()
+                    ),
                 });
             }
             let vertex_count = layer.positions.len() as u32;
-            if gpu_layer.topology_version != Some(layer.topology_version) || gpu_layer.vertex_count != vertex_count {
+            if gpu_layer.topology_version != Some(layer.topology_version)
+                || gpu_layer.vertex_count != vertex_count
+            {
                 let max_index = layer.triangles.iter().flatten().copied().max().unwrap_or(0);
                 if !layer.triangles.is_empty() && max_index >= vertex_count {
                     return Err(RenderError::InvalidSnapshot {
@@ -818,7 +835,10 @@ impl SceneRenderer {
 
         // What every view's camera uniform carries from the snapshot: lamp, shadow casters, regions.
         let mut scene = SceneUniform {
-            lamp: Vec3::from(LAMP).normalize().extend(if self.style.shadows { SHADOW_STRENGTH } else { 0.0 }).into(),
+            lamp: Vec3::from(LAMP)
+                .normalize()
+                .extend(if self.style.shadows { SHADOW_STRENGTH } else { 0.0 })
+                .into(),
             ..SceneUniform::default()
         };
         for (k, pose) in snapshot.instrument.iter().chain(snapshot.clamped.iter()).take(2).enumerate() {
@@ -1039,7 +1059,10 @@ impl SceneRenderer {
         let draw_lines = |pass: &mut wgpu::RenderPass<'_>, lines: &LinesGpu, slot: usize| {
             if lines.count > 0 {
                 pass.set_bind_group(1, &self.object_bind_group, &[offset(slot)]);
-                pass.set_vertex_buffer(0, lines.buffer.buffer.slice(..u64::from(lines.count) * instance_bytes));
+                pass.set_vertex_buffer(
+                    0,
+                    lines.buffer.buffer.slice(..u64::from(lines.count) * instance_bytes),
+                );
                 pass.draw(0..6, 0..lines.count);
             }
         };

@@ -419,7 +419,8 @@ impl World {
             && let Some(tip) = self.instrument.grasped.and_then(|e| self.tissue.world_position(e))
         {
             let (axis, roll) = self.clamp_axis;
-            out.clamped = Some(InstrumentPose { kind: InstrumentKind::Forceps, tip, axis, roll, closed: true });
+            out.clamped =
+                Some(InstrumentPose { kind: InstrumentKind::Forceps, tip, axis, roll, closed: true });
         }
         out.regions.clone_from(&self.regions);
         out.cut_path.clear();

@@ -138,8 +138,8 @@ impl Tissue {
             match self.body.link_broken(id) {
                 None => {
                     out.push([pa, pb]);
-                    let d = ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2) + (pb[2] - pa[2]).powi(2))
-                        .sqrt();
+                    let d =
+                        ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2) + (pb[2] - pa[2]).powi(2)).sqrt();
                     stretch.push(d / self.rest_len[l].max(f32::MIN_POSITIVE));
                 }
                 Some(reason) => broken.push(BrokenFibre { ends: [pa, pb], cut: reason == BreakReason::Cut }),
