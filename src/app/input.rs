@@ -20,8 +20,12 @@ const INSERT_PER_NOTCH_MM: f32 = 1.0;
 /// Where a hovering tip waits above the surface, metres.
 const HOVER_GAP: f32 = 0.002;
 
-/// The view shape a scene's camera is framed for (width over height); narrower views back off.
+/// The view shape a scene's camera is framed for (width over height); narrower views back off a little
+/// (at most [`MAX_BACK_OFF`]), keeping the work area in the middle of the tissue in view and the tissue
+/// filling most of the view, rather than fitting the whole tissue into a narrow view.
 const FRAMED_ASPECT: f32 = 1.5;
+/// The most a narrow view backs the camera off, as a factor on its distance.
+const MAX_BACK_OFF: f32 = 1.25;
 
 /// A camera that can be put back where it started.
 #[derive(Clone, Copy, Debug)]
@@ -56,7 +60,7 @@ impl CameraRig {
         self.aspect = aspect;
         if !self.moved {
             self.camera = self.home;
-            self.camera.distance *= (FRAMED_ASPECT / aspect).clamp(1.0, 3.0);
+            self.camera.distance *= (FRAMED_ASPECT / aspect).sqrt().clamp(1.0, MAX_BACK_OFF);
         }
     }
 }

@@ -69,7 +69,7 @@ impl Default for Style {
             steel_color: [0.7, 0.73, 0.78],
             handle_color: [0.5, 0.53, 0.58],
             mark_color: [1.0, 0.78, 0.1],
-            mark_width_px: 6.0,
+            mark_width_px: 4.5,
             show_regions: true,
             shadows: true,
             show_fibres: true,
