@@ -32,7 +32,7 @@ pub fn open_edges(layer: &LayerMesh, scratch: &mut Vec<(u64, u32)>, out: &mut Ve
     scratch.sort_unstable_by_key(|e| e.0);
     let on_border = |a: u32, b: u32| {
         let (Some(p), Some(q)) = (layer.uv.get(a as usize), layer.uv.get(b as usize)) else { return false };
-        let edge = |x: f32| x < 1e-4 || x > 1.0 - 1e-4;
+        let edge = |x: f32| !(1e-4..=1.0 - 1e-4).contains(&x);
         (edge(p[0]) && edge(q[0]) && (p[0] - q[0]).abs() < 1e-4)
             || (edge(p[1]) && edge(q[1]) && (p[1] - q[1]).abs() < 1e-4)
     };
