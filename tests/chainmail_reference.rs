@@ -7,7 +7,7 @@
 
 use dissect::chainmail::{
     Body, BreakReason, ElementId, GridSpec, Lattice, LinkId, LinkSpec, Material, Pass, RelaxBudget,
-    RelaxRegion, Workspace,
+    RelaxRegion, SimdLevel, Workspace,
 };
 use proptest::prelude::*;
 
@@ -348,12 +348,17 @@ fn largest_gap(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
     a.iter().flatten().zip(b.iter().flatten()).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
 }
 
+/// The SIMD levels the fast paths are checked at (each capped at what the machine has).
+const LEVELS: [SimdLevel; 3] = [SimdLevel::Avx512, SimdLevel::Avx2, SimdLevel::Scalar];
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
     #[test]
-    fn engine_matches_the_reference(c in case()) {
+    fn engine_matches_the_reference(c in case(), level in 0..LEVELS.len()) {
         let mut body = build(&c);
         let mut ws = Workspace::new(&body);
+        // Each SIMD level's paths (capped at what this machine has) against the same reference.
+        ws.set_simd(LEVELS[level]);
         let mut pos = body.positions().to_vec();
         for (step, &(e, d, pass)) in c.moves.iter().enumerate() {
             let pass = [Pass::All, Pass::Plane, Pass::Normal][pass as usize];
@@ -372,11 +377,12 @@ proptest! {
                 body.relax(&mut ws, RelaxBudget::sweeps(2), RelaxRegion::All);
                 reference_sweep(&body, &mut pos, None);
                 reference_sweep(&body, &mut pos, None);
-                // Whole-body sweeps on wide grids take the stencil's fast path, which agrees with the
-                // reference up to rounding (see `grid_sweeps_match_the_generic_path`): checked to that
-                // tolerance, then the reference takes the engine's positions, so that the next
-                // deformation starts alike and is again compared bit for bit.
-                if c.dims.iter().any(|&d| d >= 8) {
+                // Whole-body sweeps on wide grids (on any grid with single-float "vectors") take the
+                // stencil's fast path, which agrees with the reference up to rounding (see
+                // `grid_sweeps_match_the_generic_path`): checked to that tolerance, then the reference
+                // takes the engine's positions, so that the next deformation starts alike and is
+                // again compared bit for bit.
+                if c.dims.iter().any(|&d| d >= 8) || ws.simd() == SimdLevel::Scalar {
                     let extent = c.dims.iter().max().copied().unwrap_or(1) as f32 * 0.01;
                     let tolerance = 64.0 * f32::EPSILON * extent;
                     let gap = largest_gap(body.positions(), &pos);
@@ -509,11 +515,11 @@ fn banded_sweeps_match_the_generic_path() {
 
 /// Grasps in the middle of wide rows: the lists across rows then carry runs up the row (right of the
 /// grasp) and down it (left of it), long enough for the chain reaction's whole chunks both ways, with
-/// rigid, soft and two-material bodies, cuts and a pin. Moves, their order and sponsors must be the
-/// reference's.
+/// rigid, soft and two-material bodies, cuts and a pin, at every SIMD level. Moves, their order and
+/// sponsors must be the reference's.
 #[test]
 fn grasps_mid_row_match_the_reference() {
-    for dims in [[70, 40, 1], [40, 20, 4]] {
+    for (dims, level) in [[70, 40, 1], [40, 20, 4]].into_iter().flat_map(|d| LEVELS.map(|l| (d, l))) {
         for (material, cuts) in [
             (Material::rigid(), &[][..]),
             (Material::relative(1.1, 0.9, 0.2), &[][..]),
@@ -524,6 +530,7 @@ fn grasps_mid_row_match_the_reference() {
             let dressing = Dressing { stiffness: 2.0, region_x: 0.05, pins: &[n - 3], holds: &[], cuts };
             let mut body = dress(lattice, material, &dressing);
             let mut ws = Workspace::new(&body);
+            ws.set_simd(level);
             let mut pos = body.positions().to_vec();
             let [nx, ny, nz] = dims;
             let middle = (nz / 2 * ny + ny / 2) * nx + nx / 2;
@@ -539,15 +546,18 @@ fn grasps_mid_row_match_the_reference() {
                 let target = [p[0] + d[0], p[1] + d[1], p[2] + d[2]];
                 let r = body.deform(&mut ws, ElementId(e as u32), target, Pass::All).expect("deform");
                 let (fraction, moved, sponsors) = reference_deform(&body, &mut pos, e, target, Pass::All);
-                assert_eq!(r.fraction, fraction, "{dims:?} step {step}");
-                assert!(same(body.positions(), &pos), "{dims:?}: positions differ after move {step}");
+                assert_eq!(r.fraction, fraction, "{dims:?} {level:?} step {step}");
+                assert!(
+                    same(body.positions(), &pos),
+                    "{dims:?} {level:?}: positions differ after move {step}"
+                );
                 let got: Vec<usize> = ws.moved().map(|m| m.index()).collect();
-                assert_eq!(got, moved, "{dims:?}: order of moves {step}");
+                assert_eq!(got, moved, "{dims:?} {level:?}: order of moves {step}");
                 for (&m, &s) in moved.iter().zip(&sponsors) {
                     assert_eq!(
                         ws.sponsor(ElementId(m as u32)),
                         Some(ElementId(s as u32)),
-                        "{dims:?} step {step}"
+                        "{dims:?} {level:?} step {step}"
                     );
                 }
             }

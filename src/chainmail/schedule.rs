@@ -2,7 +2,8 @@
 //! thread and one on rayon's pool, with a short spin-wait instead of sleeping. Knows nothing of
 //! bodies: the relaxation's bands (`relax/bands.rs`) call it.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::time::Duration;
 
 use web_time::Instant;
@@ -17,26 +18,38 @@ const SPIN: Duration = Duration::from_millis(2);
 /// tens of microseconds, as much as a quarter of a whole-body sweep. Here only one pool thread is
 /// woken, and the caller, once done with its own half, spins briefly rather than sleeping (and
 /// then blocks as usual, which also lets a pool thread calling this run the other half itself).
+/// If no pool thread has started `there` by the time `here` is done (a machine busy with other
+/// work), the caller runs it itself rather than wait for one: either way each half runs once,
+/// so the results do not depend on which thread ran it.
 pub(crate) fn here_and_there<A, B>(here: A, there: B) -> (f32, f32)
 where
     A: FnOnce() -> f32,
     B: FnOnce() -> f32 + Send,
 {
+    let task = Mutex::new(Some(there));
+    // Whoever takes the task first runs it.
+    let take = || task.lock().ok().and_then(|mut t| t.take());
+    let far = AtomicU32::new(0f32.to_bits());
     let done = AtomicBool::new(false);
-    let mut far = 0.0;
     let near = rayon::in_place_scope(|s| {
         s.spawn(|_| {
-            far = there();
+            if let Some(there) = take() {
+                far.store(there().to_bits(), Ordering::Relaxed);
+            }
             done.store(true, Ordering::Release);
         });
         let near = here();
-        let start = Instant::now();
-        while !done.load(Ordering::Acquire) && start.elapsed() < SPIN {
-            for _ in 0..64 {
-                std::hint::spin_loop();
+        if let Some(there) = take() {
+            far.store(there().to_bits(), Ordering::Relaxed);
+        } else {
+            let start = Instant::now();
+            while !done.load(Ordering::Acquire) && start.elapsed() < SPIN {
+                for _ in 0..64 {
+                    std::hint::spin_loop();
+                }
             }
         }
         near
     });
-    (near, far)
+    (near, f32::from_bits(far.load(Ordering::Relaxed)))
 }

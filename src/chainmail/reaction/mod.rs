@@ -2,8 +2,8 @@
 //!
 //! This file holds the API (a deformation, with bisection when a pinned or held element blocks it)
 //! and the one-by-one reaction over Gibson's per-direction candidate lists; `runs.rs` moves runs of
-//! a list across rows a chunk at a time (`chunk.rs` portable, `avx512.rs` with mask registers), all
-//! on the arrays and checks of `arrays.rs`.
+//! a list across rows a chunk at a time (`chunk.rs` portable, `vector.rs` with AVX-512 or AVX2
+//! registers, `lanes.rs`), all on the arrays and checks of `arrays.rs`.
 
 use super::body::{Body, FIXED, PINNED};
 use super::coords::{norm, sub};
@@ -15,10 +15,12 @@ use arrays::{Moving, Patterns, Run, Slices, candidate_box, clamp_masked};
 use runs::{Wide, batch};
 
 mod arrays;
-#[cfg(target_arch = "x86_64")]
-mod avx512;
 mod chunk;
+#[cfg(target_arch = "x86_64")]
+mod lanes;
 mod runs;
+#[cfg(target_arch = "x86_64")]
+mod vector;
 
 /// Which coordinates a deformation constrains and moves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -304,10 +306,7 @@ impl<const MASK: u8> pulp::WithSimd for Reaction<'_, MASK> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        let wide = self.ws.simd().v4();
-        #[cfg(not(target_arch = "x86_64"))]
-        let wide = None;
+        let wide = Wide::of(self.ws.simd());
         self.body.chain_reaction_in::<MASK>(self.ws, self.source, self.goal, wide)
     }
 }

@@ -1,19 +1,48 @@
 //! Runs of a candidate list across rows moved as one: the entries are consecutive sponsors (up a
 //! row or down it) whose candidates in the next row are consecutive too and independent of each
 //! other, so a run is checked and written a chunk of sixteen at a time, with the one-by-one path's
-//! moves, order and sponsors. Chunks take the AVX-512 path where the level allows it
-//! (`avx512.rs`), else the portable one (`chunk.rs`).
+//! moves, order and sponsors. Chunks take the vector path (`vector.rs`: AVX-512 or AVX2) where the
+//! level allows it, else the portable one (`chunk.rs`).
 
 use super::arrays::{At, CHUNK, Moving, Patterns, RUN, Run, Slices, candidate_box, clamp_masked, push_ends};
 use super::chunk::check_chunk;
-use crate::chainmail::body::FIXED;
-
-/// The AVX-512 registers, when the level and the machine have them.
 #[cfg(target_arch = "x86_64")]
-pub(super) type Wide = Option<pulp::x86::V4>;
-/// Elsewhere none: the chunks take the portable path.
-#[cfg(not(target_arch = "x86_64"))]
-pub(super) type Wide = Option<std::convert::Infallible>;
+use super::vector;
+use crate::chainmail::body::FIXED;
+use crate::chainmail::simd::SimdLevel;
+#[cfg(target_arch = "x86_64")]
+use pulp::x86::{V3, V4};
+
+/// The vector registers the chunks use, as the level and the machine allow.
+#[derive(Clone, Copy)]
+pub(super) enum Wide {
+    /// AVX-512: one register per chunk, mask registers.
+    #[cfg(target_arch = "x86_64")]
+    Avx512(V4),
+    /// AVX2: two registers per chunk.
+    #[cfg(target_arch = "x86_64")]
+    Avx2(V3),
+    /// Plain loops over lanes, which the compiler vectorises as it can.
+    Portable,
+}
+
+impl Wide {
+    /// The widest the level and the machine allow.
+    #[inline(always)]
+    pub(super) fn of(level: SimdLevel) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(v) = level.v4() {
+                return Self::Avx512(v);
+            }
+            if let Some(v) = level.v3() {
+                return Self::Avx2(v);
+            }
+        }
+        let _ = level;
+        Self::Portable
+    }
+}
 
 /// Moves a run of candidates at once: list entries `s, s + 1, ...` (or `s, s - 1, ...`; sponsors
 /// whose neighbours across rows are at the grid offsets), whose candidates `s + o, s + o + 1, ...`
@@ -62,11 +91,13 @@ pub(super) fn batch<const MASK: u8>(
     };
     let bounds = patterns.get::<MASK>(cls, b);
     if down {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(v) = wide {
-            return super::avx512::batch_down(v, run, b, m, bounds);
-        }
-        return 0;
+        return match wide {
+            #[cfg(target_arch = "x86_64")]
+            Wide::Avx512(v) => vector::batch_down(v, run, b, m, bounds),
+            #[cfg(target_arch = "x86_64")]
+            Wide::Avx2(v) => vector::batch_down(v, run, b, m, bounds),
+            Wide::Portable => 0,
+        };
     }
     let mut done = 0;
     let mut q = [0.0f32; 3 * CHUNK];
@@ -77,15 +108,15 @@ pub(super) fn batch<const MASK: u8>(
         let k = if head + done + CHUNK > end {
             0
         } else {
-            match wide {
+            let k;
+            (k, written) = match wide {
                 #[cfg(target_arch = "x86_64")]
-                Some(v) => {
-                    let k;
-                    (k, written) = super::avx512::chunk(v, b, m, at, bounds, &mut q);
-                    k
-                }
-                _ => check_chunk(b, m, at, bounds, &mut q),
-            }
+                Wide::Avx512(v) => vector::chunk(v, b, m, at, bounds, &mut q),
+                #[cfg(target_arch = "x86_64")]
+                Wide::Avx2(v) => vector::chunk(v, b, m, at, bounds, &mut q),
+                Wide::Portable => (check_chunk(b, m, at, bounds, &mut q), false),
+            };
+            k
         };
         let k = if k > 0 {
             k
@@ -127,12 +158,13 @@ pub(super) fn batch<const MASK: u8>(
             }
             // In range: the candidates' neighbours across rows are at the grid offsets.
             let d = c.wrapping_add_signed(ou);
-            #[cfg(target_arch = "x86_64")]
-            if let Some(v) = wide {
-                super::avx512::push(v, m, u, [c, d, k], false);
-                continue;
+            match wide {
+                #[cfg(target_arch = "x86_64")]
+                Wide::Avx512(v) => vector::push(v, m, u, [c, d, k], false),
+                #[cfg(target_arch = "x86_64")]
+                Wide::Avx2(v) => vector::push(v, m, u, [c, d, k], false),
+                Wide::Portable => push(m, u, [c, d, k]),
             }
-            push(m, u, [c, d, k]);
         }
         done += k;
         if k < CHUNK {

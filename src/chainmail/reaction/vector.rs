@@ -1,35 +1,40 @@
-//! The AVX-512 form of a run's chunks: checked with mask registers and, when all of a chunk passes,
+//! The vector form of a run's chunks, for AVX-512 (one register per sixteen lanes, mask registers)
+//! and AVX2 (two registers; `lanes.rs`): checked without branches and, when all of a chunk passes,
 //! written straight from the registers the check computed (no round trip through memory). Runs go
 //! up a row ([`chunk`]) or down it ([`batch_down`]); the results are the portable path's and the
 //! one-by-one path's bit for bit.
 
-use pulp::Simd;
-use pulp::x86::V4;
-use pulp::{f32x16, u32x16};
-
 use super::arrays::{At, CHUNK, Moving, Pattern, RUN, Run, Slices, bad_bytes, class_breaks, push_ends};
+use super::lanes::Lanes;
 
-const IOTA: u32x16 = u32x16(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+/// Lane `i` holds `i`.
+const IOTA: [u32; CHUNK] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+
+/// [`IOTA`] in a vector.
+#[inline(always)]
+fn iota<L: Lanes>() -> L::U {
+    pulp::cast(IOTA)
+}
 
 /// Sixteen `u32` from the start of `x`.
 #[inline(always)]
-fn load(x: &[u32]) -> Option<u32x16> {
+fn load<L: Lanes>(x: &[u32]) -> Option<L::U> {
     x.first_chunk::<CHUNK>().map(|a| pulp::cast(*a))
 }
 
 /// The candidates `pc` clamped into their boxes around the sponsors `ps` (as `clamp_masked`, by
 /// comparisons, bit for bit), and a bit at `3 i` for each element `i` the clamp leaves in place.
 #[inline(always)]
-fn clamp(v: V4, ps: [f32x16; 3], pc: [f32x16; 3], bounds: &Pattern) -> ([f32x16; 3], u64) {
-    let lo: [f32x16; 3] = pulp::cast(bounds.lo);
-    let hi: [f32x16; 3] = pulp::cast(bounds.hi);
+fn clamp<L: Lanes>(v: L, ps: [L::F; 3], pc: [L::F; 3], bounds: &Pattern) -> ([L::F; 3], u64) {
+    let lo: [L::F; 3] = pulp::cast(bounds.lo);
+    let hi: [L::F; 3] = pulp::cast(bounds.hi);
     let mut x = pc;
     let mut same = 0u64;
     for i in 0..3 {
-        let (l, h) = (v.sub_f32s(ps[i], hi[i]), v.sub_f32s(ps[i], lo[i]));
-        let y = v.select_f32x16(v.cmp_lt_f32x16(pc[i], l), l, pc[i]);
-        x[i] = v.select_f32x16(v.cmp_gt_f32x16(y, h), h, y);
-        same |= (v.cmp_eq_f32x16(x[i], pc[i]).0 as u64) << (CHUNK * i);
+        let (l, h) = (v.sub_f(ps[i], hi[i]), v.sub_f(ps[i], lo[i]));
+        let y = v.select(v.less(pc[i], l), l, pc[i]);
+        x[i] = v.select(v.greater(y, h), h, y);
+        same |= u64::from(v.equal_f_bits(x[i], pc[i])) << (CHUNK * i);
     }
     // An element stays put when all three of its lanes do.
     (x, same & (same >> 1) & (same >> 2) & 0o1111_1111_1111_1111)
@@ -39,23 +44,23 @@ fn clamp(v: V4, ps: [f32x16; 3], pc: [f32x16; 3], bounds: &Pattern) -> ([f32x16;
 /// sponsor and candidate in memory `[ls, lc]` on, the candidates' stamps, the sponsors' and
 /// candidates' positions, their byte checks ([`bad_bytes`]) and the class change bits of
 /// sixteen elements from `breaks_at` in slot `t`.
-struct Loaded {
-    e: u32x16,
-    st: u32x16,
-    ps: [f32x16; 3],
-    pc: [f32x16; 3],
+struct Loaded<L: Lanes> {
+    e: L::U,
+    st: L::U,
+    ps: [L::F; 3],
+    pc: [L::F; 3],
     bad_bytes: u128,
     breaks: u16,
 }
 
-impl Loaded {
+impl<L: Lanes> Loaded<L> {
     #[inline(always)]
     fn at(b: Slices<'_>, m: &Moving<'_>, at: At, [ls, lc]: [usize; 2], breaks_at: usize) -> Option<Self> {
         Some(Self {
-            e: load(at.entries(m.lists))?,
-            st: load(m.stamp.get(lc..)?)?,
-            ps: load3(m.pos.get(ls..)?)?,
-            pc: load3(m.pos.get(lc..)?)?,
+            e: load::<L>(at.entries(m.lists))?,
+            st: load::<L>(m.stamp.get(lc..)?)?,
+            ps: load3::<L>(m.pos.get(ls..)?)?,
+            pc: load3::<L>(m.pos.get(lc..)?)?,
             bad_bytes: bad_bytes(b, ls, lc)?,
             breaks: class_breaks(b, at.t, breaks_at)?,
         })
@@ -64,7 +69,7 @@ impl Loaded {
 
 /// Sixteen positions from the start of `x`, as three vectors.
 #[inline(always)]
-fn load3(x: &[[f32; 3]]) -> Option<[f32x16; 3]> {
+fn load3<L: Lanes>(x: &[[f32; 3]]) -> Option<[L::F; 3]> {
     x.first_chunk::<CHUNK>().map(|a| pulp::cast(*a))
 }
 
@@ -73,8 +78,8 @@ fn load3(x: &[[f32; 3]]) -> Option<[f32x16; 3]> {
 /// how many leading elements pass and whether they were written (else their clamped positions are
 /// in `q`).
 #[inline(always)]
-pub(super) fn chunk(
-    v: V4,
+pub(super) fn chunk<L: Lanes>(
+    v: L,
     b: Slices<'_>,
     m: &mut Moving<'_>,
     at: At,
@@ -82,12 +87,12 @@ pub(super) fn chunk(
     q: &mut [f32; 3 * CHUNK],
 ) -> (usize, bool) {
     let At { s, c, after, .. } = at;
-    let Some(Loaded { e, st, ps, pc, bad_bytes, breaks }) = Loaded::at(b, m, at, [s, c], s) else {
+    let Some(Loaded { e, st, ps, pc, bad_bytes, breaks }) = Loaded::<L>::at(b, m, at, [s, c], s) else {
         return (0, false);
     };
-    let gs = v.splat_u32s(m.g);
-    let in_sequence = v.equal_u32s(e, v.add_u32s(v.splat_u32s(s as u32), IOTA)).0;
-    let unmoved = !v.equal_u32s(st, gs).0;
+    let gs = v.splat(m.g);
+    let in_sequence = v.equal_bits(e, v.add(v.splat(s as u32), iota::<L>()));
+    let unmoved = !v.equal_bits(st, gs);
     // The run's first element has the run's class by definition; the others must not change it.
     let bad = !(in_sequence & unmoved) | breaks & !u16::from(after == 0);
     let (x, still) = clamp(v, ps, pc, bounds);
@@ -100,8 +105,8 @@ pub(super) fn chunk(
         *q = pulp::cast(x);
         return (k, false);
     }
-    let sponsors = v.add_u32s(v.splat_u32s(s as u32), IOTA);
-    let order = pulp::cast::<u32x16, [u32; CHUNK]>(v.add_u32s(v.splat_u32s(c as u32), IOTA));
+    let sponsors = v.add(v.splat(s as u32), iota::<L>());
+    let order = pulp::cast::<L::U, [u32; CHUNK]>(v.add(v.splat(c as u32), iota::<L>()));
     // The first `k` lanes.
     let lanes = ((1u32 << k) - 1) as u16;
     let moves = Moves { c, pc, x, sponsors, lanes, order: &order[..k] };
@@ -115,23 +120,23 @@ pub(super) fn chunk(
 
 /// The writes of a chunk's moves: candidates from `c` (memory order) at `pc`, moving to `x`, in
 /// the lanes set in `lanes`, with `sponsors`; `order` is the moved list's part.
-struct Moves<'a> {
+struct Moves<'a, L: Lanes> {
     c: usize,
-    pc: [f32x16; 3],
-    x: [f32x16; 3],
-    sponsors: u32x16,
+    pc: [L::F; 3],
+    x: [L::F; 3],
+    sponsors: L::U,
     lanes: u16,
     order: &'a [u32],
 }
 
-impl Moves<'_> {
+impl<L: Lanes> Moves<'_, L> {
     /// Writes new and old positions, stamps, sponsors and the moved list; the lanes not moved are
     /// written back as they were (they are other elements than the moved ones, and nothing else
     /// writes them meanwhile). `false`, with nothing written, if the range is not in the body.
     #[inline(always)]
-    fn write(&self, v: V4, m: &mut Moving<'_>) -> bool {
+    fn write(&self, v: L, m: &mut Moving<'_>) -> bool {
         let &Moves { c, pc, mut x, sponsors, lanes, order } = self;
-        let gs = v.splat_u32s(m.g);
+        let gs = v.splat(m.g);
         let Some((o, p, st, sp)) = m.chunk_at(c) else {
             return false;
         };
@@ -143,19 +148,19 @@ impl Moves<'_> {
         } else {
             // Each element's three coordinates.
             let coords = (0..CHUNK).filter(|&i| lanes >> i & 1 == 1).fold(0u64, |m, i| m | 0b111 << (3 * i));
-            let was: [f32x16; 3] = pulp::cast(*o);
+            let was: [L::F; 3] = pulp::cast(*o);
             let mut new_old = was;
             for i in 0..3 {
-                let m = pulp::b16((coords >> (CHUNK * i)) as u16);
-                x[i] = v.select_f32x16(m, x[i], pc[i]);
-                new_old[i] = v.select_f32x16(m, pc[i], was[i]);
+                let m = v.mask((coords >> (CHUNK * i)) as u16);
+                x[i] = v.select(m, x[i], pc[i]);
+                new_old[i] = v.select(m, pc[i], was[i]);
             }
-            let (st_was, sp_was): (u32x16, u32x16) = (pulp::cast(*st), pulp::cast(*sp));
-            let lanes = pulp::b16(lanes);
+            let (st_was, sp_was): (L::U, L::U) = (pulp::cast(*st), pulp::cast(*sp));
+            let lanes = v.mask(lanes);
             *o = pulp::cast(new_old);
             *p = pulp::cast(x);
-            *st = pulp::cast(v.select_u32s(lanes, gs, st_was));
-            *sp = pulp::cast(v.select_u32s(lanes, sponsors, sp_was));
+            *st = pulp::cast(v.select_u(lanes, gs, st_was));
+            *sp = pulp::cast(v.select_u(lanes, sponsors, sp_was));
         }
         match order.first_chunk::<CHUNK>() {
             // A fixed length: vector moves, not a call.
@@ -172,20 +177,21 @@ impl Moves<'_> {
 /// how many moves were written: none when the chunk's first fails, or when fewer than two would
 /// be in the run so far (left to the one-by-one path).
 #[inline(always)]
-fn chunk_down(v: V4, b: Slices<'_>, m: &mut Moving<'_>, at: At, bounds: &Pattern) -> usize {
+fn chunk_down<L: Lanes>(v: L, b: Slices<'_>, m: &mut Moving<'_>, at: At, bounds: &Pattern) -> usize {
     let At { s, c, after, .. } = at;
     let (Some(ls), Some(lc)) = (s.checked_sub(CHUNK - 1), c.checked_sub(CHUNK - 1)) else {
         return 0;
     };
     // Change bits of elements `ls + 1 ..= s + 1`: element `ls + i` keeps the run's class while
     // every bit `j >= i` is clear (bit 15, the element above the chunk, matters only after it).
-    let Some(Loaded { e, st, ps, pc, bad_bytes, breaks }) = Loaded::at(b, m, at, [ls, lc], ls + 1) else {
+    let Some(Loaded { e, st, ps, pc, bad_bytes, breaks }) = Loaded::<L>::at(b, m, at, [ls, lc], ls + 1)
+    else {
         return 0;
     };
-    let gs = v.splat_u32s(m.g);
+    let gs = v.splat(m.g);
     // Entries in list order: lane `k` is sponsor `s - k`.
-    let in_sequence = v.equal_u32s(e, v.sub_u32s(v.splat_u32s(s as u32), IOTA)).0;
-    let moved_now = v.equal_u32s(st, gs).0;
+    let in_sequence = v.equal_bits(e, v.sub(v.splat(s as u32), iota::<L>()));
+    let moved_now = v.equal_bits(st, gs);
     let breaks = breaks & if after == 0 { 0x7fff } else { 0xffff };
     let (x, still) = clamp(v, ps, pc, bounds);
     // The highest failing lane, by memory order (16 when none fails).
@@ -203,8 +209,8 @@ fn chunk_down(v: V4, b: Slices<'_>, m: &mut Moving<'_>, at: At, bounds: &Pattern
         return 0;
     }
     // Moved in the run's order: `c, c - 1, ...`; the top `k` lanes.
-    let order = pulp::cast::<u32x16, [u32; CHUNK]>(v.sub_u32s(v.splat_u32s(c as u32), IOTA));
-    let sponsors = v.add_u32s(v.splat_u32s(ls as u32), IOTA);
+    let order = pulp::cast::<L::U, [u32; CHUNK]>(v.sub(v.splat(c as u32), iota::<L>()));
+    let sponsors = v.add(v.splat(ls as u32), iota::<L>());
     let lanes = (((1u32 << k) - 1) << (CHUNK - k)) as u16;
     let moves = Moves { c: lc, pc, x, sponsors, lanes, order: &order[..k] };
     if moves.write(v, m) { k } else { 0 }
@@ -214,7 +220,13 @@ fn chunk_down(v: V4, b: Slices<'_>, m: &mut Moving<'_>, at: At, bounds: &Pattern
 /// the one-by-one path would: the same moves in the same order, the same sponsors, and the same
 /// list entries but for those whose neighbour has moved by the time they would be read.
 #[inline(always)]
-pub(super) fn batch_down(v: V4, run: &Run, b: Slices<'_>, m: &mut Moving<'_>, bounds: &Pattern) -> usize {
+pub(super) fn batch_down<L: Lanes>(
+    v: L,
+    run: &Run,
+    b: Slices<'_>,
+    m: &mut Moving<'_>,
+    bounds: &Pattern,
+) -> usize {
     let &Run { list, head, end, t, o } = run;
     let s0 = m.lists[list + head] as usize;
     let c0 = s0.wrapping_add_signed(o);
@@ -250,7 +262,7 @@ pub(super) fn batch_down(v: V4, run: &Run, b: Slices<'_>, m: &mut Moving<'_>, bo
 /// Pushes candidates `c, c ± 1, ...` (`k` of them, down the row if `down`) to the candidate list
 /// of slot `u` where their neighbours `d, d ± 1, ...` have not moved: sixteen at once when none has.
 #[inline(always)]
-pub(super) fn push(v: V4, m: &mut Moving<'_>, u: usize, [c, d, k]: [usize; 3], down: bool) {
+pub(super) fn push<L: Lanes>(v: L, m: &mut Moving<'_>, u: usize, [c, d, k]: [usize; 3], down: bool) {
     let (n, g) = (m.n(), m.g);
     let (stamp, list, end) = (&*m.stamp, &mut m.lists[u * n..(u + 1) * n], &mut m.tail[u]);
     // The neighbours' stamps in memory order: the first `k` lanes up the row, the last `k` down.
@@ -259,14 +271,14 @@ pub(super) fn push(v: V4, m: &mut Moving<'_>, u: usize, [c, d, k]: [usize; 3], d
     } else {
         (Some(d), ((1u32 << k) - 1) as u16)
     };
-    let cs = v.splat_u32s(c as u32);
+    let cs = v.splat(c as u32);
     if let (Some(ds), Some(slots)) = (
-        first.and_then(|f| stamp.get(f..)).and_then(load),
+        first.and_then(|f| stamp.get(f..)).and_then(load::<L>),
         list.get_mut(*end..).and_then(<[u32]>::first_chunk_mut::<CHUNK>),
-    ) && v.equal_u32s(ds, v.splat_u32s(g)).0 & lanes == 0
+    ) && v.equal_bits(ds, v.splat(g)) & lanes == 0
     {
         // Entries past `k` land beyond the list's end, where nothing reads them.
-        *slots = pulp::cast(if down { v.sub_u32s(cs, IOTA) } else { v.add_u32s(cs, IOTA) });
+        *slots = pulp::cast(if down { v.sub(cs, iota::<L>()) } else { v.add(cs, iota::<L>()) });
         *end += k;
         return;
     }
