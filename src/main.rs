@@ -1,6 +1,7 @@
 //! The `dissect` command line: open the trainer, check scenes, run a script headless, replay a
 //! recording, compare runs. The only place that uses `anyhow`.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -75,8 +76,9 @@ enum Command {
         /// Directory the results are written to (created if missing).
         #[arg(long, value_name = "DIR")]
         out: PathBuf,
-        /// Steps to simulate. Default: until the script ends.
-        #[arg(long, value_name = "N")]
+        /// Steps to simulate, at most until the script ends (and at most 10 000 000). Default: until
+        /// the script ends.
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=dissect::scene::MAX_SCRIPT_STEPS))]
         steps: Option<u64>,
         /// Also record the session's input to this file (a recording, replayable and usable as a
         /// script).
@@ -98,9 +100,9 @@ enum Command {
         after_help = "The block has N x N x N nodes 5 mm apart, its base clamped; its top-centre node is pushed down by\n2% and by 20% of the block's height.\n\nExample:\n  dissect compare --nodes 16 --json out/compare.json"
     )]
     Compare {
-        /// Nodes along each axis of the block.
-        #[arg(long, value_name = "N", default_value_t = 16)]
-        nodes: usize,
+        /// Nodes along each axis of the block (2 to 256; the model refuses more than 512 MiB of matrices).
+        #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u16).range(2..=256))]
+        nodes: u16,
         /// Also write the report as JSON.
         #[arg(long, value_name = "FILE")]
         json: Option<PathBuf>,
@@ -125,18 +127,39 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 Some(script) => dissect::app::Source::Demo(script),
                 None => dissect::app::Source::Live,
             };
+            let mut inputs: Vec<&Path> = cli.scene.iter().map(PathBuf::as_path).collect();
+            if let dissect::app::Source::Demo(script) = &source {
+                inputs.push(script);
+            }
+            if let Err(e) = record_apart(cli.window.record.as_deref(), &inputs) {
+                eprintln!("{e}");
+                return Ok(ExitCode::FAILURE);
+            }
             open_app(cli.scene, cli.window, source)
         }
         Some(Command::Check { scenes, script }) => Ok(check(&scenes, script)),
         Some(Command::Run { scene, script, out, steps, record }) => {
             run_headless(&scene, &script, &out, steps, record.as_deref())
         }
-        Some(Command::Replay { file, window }) => open_app(None, window, dissect::app::Source::Replay(file)),
+        Some(Command::Replay { file, window }) => {
+            if let Err(e) = record_apart(window.record.as_deref(), &[&file]) {
+                eprintln!("{e}");
+                return Ok(ExitCode::FAILURE);
+            }
+            open_app(None, window, dissect::app::Source::Replay(file))
+        }
         Some(Command::Compare { nodes, json }) => {
-            let cfg = dissect::fem::CompareConfig { dims: [nodes; 3], ..Default::default() };
+            let n = usize::from(nodes);
+            let cfg = dissect::fem::CompareConfig { dims: [n; 3], ..Default::default() };
+            if let Some(path) = &json
+                && let Err(e) = writable_file(path)
+            {
+                eprintln!("{e}");
+                return Ok(ExitCode::FAILURE);
+            }
             match dissect::fem::compare(&cfg) {
                 Ok(report) => {
-                    println!("{report}");
+                    say(format_args!("{report}"));
                     if let Some(path) = json {
                         std::fs::write(&path, serde_json::to_string_pretty(&report)?)
                             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
@@ -183,7 +206,7 @@ fn run_headless(
     steps: Option<u64>,
     record: Option<&Path>,
 ) -> anyhow::Result<ExitCode> {
-    let scene = match Scene::load(scene_path) {
+    let (scene, source) = match Scene::load_with_source(scene_path) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("{e}");
@@ -197,9 +220,15 @@ fn run_headless(
             return Ok(ExitCode::FAILURE);
         }
     };
+    // Everything that is written is checked before the simulation starts: a run can be long.
+    if let Err(e) = record_apart(record, &[scene_path, script_path]).and_then(|()| writable_dir(out)) {
+        eprintln!("{e}");
+        return Ok(ExitCode::FAILURE);
+    }
+    // `--steps` never runs past the script's end.
+    let steps = steps.map(|n| n.min(script.duration_steps()));
     let recorder = match record {
         Some(path) => {
-            let source = std::fs::read_to_string(scene_path).unwrap_or_default();
             match dissect::scene::Recorder::create(path, &scene_path.display().to_string(), &source) {
                 Ok(r) => Some(r),
                 Err(e) => {
@@ -233,7 +262,7 @@ fn run_headless(
                 return Ok(ExitCode::FAILURE);
             }
             let m = &output.metrics;
-            println!(
+            say(format_args!(
                 "{} steps, {} elements moved, {} links cut, {} torn, step time mean {:.1} us (p99 {:.1} us); results in {}",
                 m.steps,
                 m.elements_moved_total,
@@ -242,9 +271,9 @@ fn run_headless(
                 m.step_time_us.mean,
                 m.step_time_us.p99,
                 out.display()
-            );
+            ));
             if let Some(a) = &m.assessment {
-                println!("score {:.1}: completion {:.0}%", a.score, 100.0 * a.completion);
+                say(format_args!("score {:.1}: completion {:.0}%", a.score, 100.0 * a.completion));
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -271,13 +300,27 @@ fn write_pictures(scene: &Scene, world: &dissect::simulation::World, out: &Path)
     Ok(())
 }
 
-/// Checks every file, reporting each; failure if any is invalid.
+/// Checks every file, reporting each; failure if any is invalid. A scene whose steps will cost far
+/// more than its rate allows gets a warning (it is still valid). When nobody reads the output any more
+/// (a closed pipe), the check ends quietly.
 fn check(paths: &[PathBuf], scripts: bool) -> ExitCode {
     let mut ok = true;
     for path in paths {
-        let result = if scripts { Script::load(path).map(|_| ()) } else { Scene::load(path).map(|_| ()) };
+        let result = if scripts {
+            Script::check_file(path)
+        } else {
+            Scene::load(path).map(|scene| {
+                if let Some(w) = scene.cost_warning() {
+                    eprintln!("{}: warning: {w}", path.display());
+                }
+            })
+        };
         match result {
-            Ok(()) => println!("ok: {}", path.display()),
+            Ok(()) => {
+                if !say(format_args!("ok: {}", path.display())) {
+                    break;
+                }
+            }
             Err(e) => {
                 ok = false;
                 eprintln!("{e}");
@@ -285,4 +328,61 @@ fn check(paths: &[PathBuf], scripts: bool) -> ExitCode {
         }
     }
     if ok { ExitCode::SUCCESS } else { ExitCode::FAILURE }
+}
+
+/// Prints a line on the standard output; false when it cannot be written (a reader that went away:
+/// `dissect check *.ron | head -1`), which the caller takes as a reason to stop, not to panic.
+fn say(line: std::fmt::Arguments) -> bool {
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{line}").and_then(|()| out.flush()).is_ok()
+}
+
+/// Refuses a recording path that is one of the inputs (the same file under any name): recording
+/// would overwrite it.
+fn record_apart(record: Option<&Path>, inputs: &[&Path]) -> anyhow::Result<()> {
+    let Some(record) = record else { return Ok(()) };
+    for input in inputs {
+        if same_file::is_same_file(record, input).unwrap_or(false) {
+            anyhow::bail!(
+                "{}: --record would overwrite an input file ({}); expected a new file for the recording",
+                record.display(),
+                input.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Makes sure the output directory exists (created if missing) and takes files, before anything is
+/// simulated.
+fn writable_dir(dir: &Path) -> anyhow::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!("{}: is not a directory, expected a directory for the results (--out DIR)", dir.display());
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| anyhow::anyhow!("{}: cannot create the output directory: {e}", dir.display()))?;
+    let probe = dir.join(format!(".dissect-write-check-{}", std::process::id()));
+    std::fs::File::create(&probe)
+        .map_err(|e| anyhow::anyhow!("{}: cannot write in the output directory: {e}", dir.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    for name in ["metrics.json", "state.json", "report.json", "report.png", "trainee.png", "observer.png"] {
+        if dir.join(name).is_dir() {
+            anyhow::bail!("{}: is a directory, expected room for a file", dir.join(name).display());
+        }
+    }
+    Ok(())
+}
+
+/// Makes sure a file can be written (its directory exists and it is not a directory), without
+/// changing it.
+fn writable_file(path: &Path) -> anyhow::Result<()> {
+    if path.is_dir() {
+        anyhow::bail!("{}: is a directory, expected a file name", path.display());
+    }
+    std::fs::OpenOptions::new()
+        .append(true)
+        .create(true)
+        .open(path)
+        .map(drop)
+        .map_err(|e| anyhow::anyhow!("{}: cannot write the file: {e}", path.display()))
 }

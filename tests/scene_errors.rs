@@ -87,7 +87,7 @@ fn resolution_too_large() {
     expect(
         e,
         "5:21",
-        &["tissue.resolution is (100000, 100000) with 2 layer(s)", "20000000000 elements", "16777216", "MiB"],
+        &["tissue.resolution is (100000, 100000) with 2 layer(s)", "20000000000 elements", "1048576", "MiB"],
     );
 }
 

@@ -1,7 +1,12 @@
-//! The loader never panics: random bytes and random mutations of the bundled scenes and scripts
-//! (byte flips, deletions, duplications, number replacements) either load or give an error.
+//! The loader never panics: random bytes and random mutations of the bundled scenes, scripts and a
+//! recording (byte flips, deletions, duplications, number replacements) either load or give an error;
+//! what loads also runs (small scenes are built and stepped, scripts and recordings played for a few
+//! hundred steps on a small scene) without a panic or a non-finite position. The case count is fixed,
+//! so `cargo test` (and `.ci/run`) runs it in bounded time; `FUZZ_CASES=N` runs more.
 
-use dissect::scene::{Scene, Script};
+use std::sync::OnceLock;
+
+use dissect::scene::{Recording, Scene, Script};
 use proptest::prelude::*;
 
 const SCENES: [&str; 4] = [
@@ -110,21 +115,111 @@ fn number_runs(s: &str) -> Vec<(usize, usize)> {
     runs
 }
 
-/// Loads as a scene and as a script; only a panic fails.
+/// A recording of the default exercise's script, made once by a headless run.
+fn recording() -> &'static str {
+    static TEXT: OnceLock<String> = OnceLock::new();
+    TEXT.get_or_init(|| {
+        let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scene_fuzz");
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let path = dir.join(format!("recording-{}.ron", std::process::id()));
+        let scene = Scene::from_str(SCENES[0], "meninges.ron").expect("bundled scene");
+        let script = Script::from_str(SCRIPTS[0], "meninges.ron").expect("bundled script");
+        let mut rec =
+            dissect::scene::Recorder::create(&path, "scenes/meninges.ron", SCENES[0]).expect("recorder");
+        let out = dissect::runner::run(&scene, "meninges.ron", &script, "script.ron", Some(400), Some(&mut rec))
+            .expect("runs");
+        rec.finish(out.world.step_count()).expect("finish");
+        let text = std::fs::read_to_string(&path).expect("read");
+        let _ = std::fs::remove_file(&path);
+        text
+    })
+}
+
+/// A small two-layer scene that every bundled instrument and depth fits, for playing mutated scripts.
+fn small_scene() -> &'static Scene {
+    static SCENE: OnceLock<Scene> = OnceLock::new();
+    SCENE.get_or_init(|| {
+        let src = SCENES[0].replace("resolution: (64, 48)", "resolution: (16, 12)");
+        Scene::from_str(&src, "small.ron").expect("small scene")
+    })
+}
+
+fn cases() -> u32 {
+    std::env::var("FUZZ_CASES").ok().and_then(|n| n.parse().ok()).unwrap_or(256)
+}
+
+/// Plays a script for at most `steps` steps on `scene`; positions stay finite.
+fn play(scene: &Scene, script: &Script, steps: u64) {
+    if script.check_against(scene).is_err() {
+        return;
+    }
+    let Ok(mut world) = scene.build_world(false) else { return };
+    let mut player = dissect::runner::Player::new(script.0.clone());
+    for _ in 0..steps.min(script.duration_steps()) {
+        player.feed(&mut world);
+        world.step();
+    }
+    let t = world.tissue();
+    for layer in t.layers() {
+        for e in layer.first..layer.first + layer.count {
+            if let Some(p) = t.world_position(dissect::chainmail::ElementId(e)) {
+                assert!(p.iter().all(|x| x.is_finite()), "element {e} at {p:?}");
+            }
+        }
+    }
+}
+
+/// Loads as a scene, a script and a recording; what loads runs. Only a panic (or a non-finite
+/// position) fails.
 fn feed(bytes: &[u8]) {
     let text = String::from_utf8_lossy(bytes);
-    if let Err(e) = Scene::from_str(&text, "fuzz.ron") {
-        let msg = e.to_string();
-        assert!(msg.starts_with("fuzz.ron:"), "{msg}");
+    match Scene::from_str(&text, "fuzz.ron") {
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(msg.starts_with("fuzz.ron:"), "{msg}");
+        }
+        Ok(scene) if scene.element_count() <= 5000 => {
+            let probe = Script::from_str("Script([Select(Probe), Push(at: Surface(0.5, 0.5, 0.0), to: Surface(0.5, 0.5, -0.005), steps: 20)])", "p.ron").expect("probe");
+            play(&scene, &probe, 30);
+        }
+        Ok(_) => {}
     }
-    if let Err(e) = Script::from_str(&text, "fuzz.ron") {
-        let msg = e.to_string();
-        assert!(msg.starts_with("fuzz.ron:"), "{msg}");
+    match Script::from_str(&text, "fuzz.ron") {
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(msg.starts_with("fuzz.ron:"), "{msg}");
+        }
+        Ok(script) => play(small_scene(), &script, 300),
+    }
+    if let Ok(rec) = Recording::from_str(&text, "fuzz.ron")
+        && let Ok(scene) = Scene::from_str(&rec.scene_source, "fuzz.ron (scene_source)")
+        && scene.element_count() <= 5000
+    {
+        play(&scene, &rec.script(), 300);
     }
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
+
+    #[test]
+    fn mutated_recordings_never_panic(ms in proptest::collection::vec(mutation(), 1..6)) {
+        let mut src = recording().as_bytes().to_vec();
+        for m in &ms {
+            src = apply(&src, m);
+        }
+        feed(&src);
+    }
+
+    #[test]
+    fn recordings_cut_anywhere_never_panic(at in any::<usize>()) {
+        let text = recording();
+        let mut cut = at % (text.len() + 1);
+        while !text.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        feed(text[..cut].as_bytes());
+    }
 
     #[test]
     fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {

@@ -123,7 +123,7 @@ impl Lattice {
         if dims.contains(&0) {
             return Err(ChainMailError::EmptyGrid { dims });
         }
-        let n = check_count(dims.iter().map(|&d| d as u128).product())?;
+        let n = check_count(dims.iter().fold(1u128, |a, &d| a.saturating_mul(d as u128)))?;
         for (axis, c) in spec.coords.iter().enumerate() {
             for &x in c {
                 finite("grid coordinate", x)?;
@@ -204,7 +204,7 @@ impl Lattice {
         if dims.contains(&0) {
             return Err(ChainMailError::EmptyGrid { dims });
         }
-        let n = check_count(dims.iter().map(|&d| d as u128).product())?;
+        let n = check_count(dims.iter().fold(1u128, |a, &d| a.saturating_mul(d as u128)))?;
         if rest.len() != n {
             return Err(ChainMailError::BadCoordinates {
                 axis: 0,

@@ -7,6 +7,7 @@ use super::error::{ChainMailError, finite};
 
 /// The geometric limits of a link, in one of the two forms of the papers.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
 pub enum Limits {
     /// Li, Brodlie and Phillips: limits relative to the link's rest length `Dist`, for non-uniform
     /// lattices. Along the link the separation stays within `min_compress·Dist ..= max_stretch·Dist`;

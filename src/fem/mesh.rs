@@ -112,7 +112,7 @@ impl TetMesh {
         if dims.iter().any(|&d| d < 2) {
             return Err(FemError::EmptyGrid { dims });
         }
-        let count = dims.iter().map(|&d| d as u128).product::<u128>();
+        let count = dims.iter().fold(1u128, |a, &d| a.saturating_mul(d as u128));
         if count > MAX_NODES as u128 {
             return Err(FemError::TooBig {
                 what: format!("a mesh of {count} nodes (limit {MAX_NODES} nodes)"),

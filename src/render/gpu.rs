@@ -73,6 +73,11 @@ impl Gpu {
                 ..Default::default()
             })
             .await?;
+        // An error that no error scope catches (a buffer over the device's limit, a lost device) is
+        // logged rather than left to wgpu's default handler, which panics.
+        device.on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
+            log::error!("GPU error, the frame may be incomplete: {e}");
+        }));
         Ok(Self { instance, adapter, device, queue })
     }
 

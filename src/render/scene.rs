@@ -150,12 +150,22 @@ impl GrowBuffer {
     }
 
     /// Writes `data` at offset 0, reallocating first if it does not fit. Returns whether it reallocated.
+    /// Data larger than the device's largest buffer is not written (logged instead): scenes are
+    /// validated to stay under it, so this is a backstop, never a panic.
     fn write(&mut self, gpu: &Gpu, data: &[u8]) -> bool {
         let len = data.len() as u64;
+        let max = gpu.device.limits().max_buffer_size;
+        if len > max {
+            log::error!(
+                "{}: {len} bytes, more than the device's largest buffer ({max} bytes); not drawn",
+                self.label
+            );
+            return false;
+        }
         let grew = len > self.capacity;
         if grew {
-            *self =
-                Self::new(&gpu.device, self.label, self.usage, len.max(self.capacity + self.capacity / 2));
+            let size = len.max(self.capacity + self.capacity / 2).min(max);
+            *self = Self::new(&gpu.device, self.label, self.usage, size);
         }
         if len > 0 {
             gpu.queue.write_buffer(&self.buffer, 0, data);

@@ -158,7 +158,11 @@ impl Player {
             Action::Command(c) => {
                 match &c {
                     WorldCommand::Instrument(Command::Select(k)) => self.kind = Some(*k),
-                    WorldCommand::Instrument(Command::MoveTo(p)) => self.tip = Some(*p),
+                    // The world ignores a point that is not finite; so does the player, which
+                    // would otherwise start its next move from it.
+                    WorldCommand::Instrument(Command::MoveTo(p)) if p.iter().all(|x| x.is_finite()) => {
+                        self.tip = Some(*p)
+                    }
                     _ => {}
                 }
                 world.push(c)

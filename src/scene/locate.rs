@@ -51,10 +51,14 @@ pub(crate) struct Tree {
 /// Deepest nesting followed; RON itself refuses deeper sources.
 const MAX_DEPTH: usize = 256;
 
+/// Most values kept in a tree (about 30 MiB): values beyond them are read but not kept, so a huge list
+/// costs no memory here, and an error in one points at the deepest value kept on its way.
+const MAX_NODES: usize = 1 << 18;
+
 impl Tree {
     /// Parses as much of `src` as it can.
     pub(crate) fn parse(src: &str) -> Self {
-        let mut p = Parser { chars: src.chars().collect(), i: 0, line: 1, column: 1 };
+        let mut p = Parser { src, i: 0, line: 1, column: 1, nodes: 0 };
         p.skip_ws();
         while p.peek() == Some('#') {
             p.skip_attribute();
@@ -126,25 +130,34 @@ fn step(mut node: &Node, seg: Seg) -> Option<&Node> {
     }
 }
 
-struct Parser {
-    chars: Vec<char>,
+struct Parser<'a> {
+    src: &'a str,
+    /// Byte offset of the next character.
     i: usize,
     line: usize,
     column: usize,
+    /// Values kept so far (see [`MAX_NODES`]).
+    nodes: usize,
 }
 
-impl Parser {
+impl Parser<'_> {
     fn peek(&self) -> Option<char> {
-        self.chars.get(self.i).copied()
+        self.src[self.i..].chars().next()
     }
 
     fn peek_at(&self, k: usize) -> Option<char> {
-        self.chars.get(self.i + k).copied()
+        self.src[self.i..].chars().nth(k)
+    }
+
+    /// Whether another value may be kept; counts it.
+    fn keep(&mut self) -> bool {
+        self.nodes += 1;
+        self.nodes <= MAX_NODES
     }
 
     fn bump(&mut self) -> Option<char> {
         let c = self.peek()?;
-        self.i += 1;
+        self.i += c.len_utf8();
         if c == '\n' {
             self.line += 1;
             self.column = 1;
@@ -237,7 +250,7 @@ impl Parser {
         while self.peek().is_some_and(|c| Self::is_ident_char(c) || (raw && matches!(c, '.' | '+' | '-'))) {
             self.bump();
         }
-        Some(self.chars[start..self.i].iter().collect())
+        Some(self.src[start..self.i].to_owned())
     }
 
     fn string(&mut self) {
@@ -377,7 +390,7 @@ impl Parser {
                     c.is_ascii_alphanumeric() || c == '_' || c == '.' || c == '+' || c == '-'
                 }) {
                     // Signs inside a number only follow an exponent.
-                    let prev = self.chars.get(self.i.wrapping_sub(1)).copied().unwrap_or(' ');
+                    let prev = self.src[..self.i].chars().next_back().unwrap_or(' ');
                     let c = self.peek().unwrap_or(' ');
                     if (c == '+' || c == '-') && !matches!(prev, 'e' | 'E') {
                         break;
@@ -409,7 +422,9 @@ impl Parser {
                     return None;
                 }
                 let value = self.value(depth + 1)?;
-                fields.push((name, at, value));
+                if self.keep() {
+                    fields.push((name, at, value));
+                }
                 self.skip_ws();
                 match self.bump()? {
                     ',' => {}
@@ -448,7 +463,9 @@ impl Parser {
                 return Some(items);
             }
             let v = self.value(depth + 1)?;
-            items.push(v);
+            if self.keep() {
+                items.push(v);
+            }
             self.skip_ws();
             let c = self.bump()?;
             if c == end {
@@ -486,6 +503,21 @@ mod tests {
         let src = "Script([\n  Wait(3),\n  Grasp(Surface(0.5, 1.5, 0.0)),\n])";
         assert_eq!(at(src, &[Seg::Inner, Seg::Index(0), Seg::Index(0)]), (2, 8));
         assert_eq!(at(src, &[Seg::Inner, Seg::Index(1), Seg::Inner, Seg::Index(1)]), (3, 22));
+    }
+
+    #[test]
+    fn a_huge_list_keeps_a_bounded_tree() {
+        let n = MAX_NODES + 10;
+        let src = format!("(a: [{}], b: 7)", "0.5, ".repeat(n));
+        // Items past the limit are not kept: their path ends at the list.
+        assert_eq!(at(&src, &[Seg::Field("a"), Seg::Index(n - 1)]), (1, 5));
+        assert_eq!(at(&src, &[Seg::Field("a"), Seg::Index(3)]), (1, 21));
+        let _ = at(&src, &[Seg::Field("b")]);
+    }
+
+    #[test]
+    fn columns_count_characters_not_bytes() {
+        assert_eq!(at("(é: \"ü\", a: 1)", &[Seg::Field("a")]), (1, 14));
     }
 
     #[test]

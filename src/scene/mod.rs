@@ -12,6 +12,7 @@
 //! gets a [`SceneError`] and no scene.
 
 mod build;
+mod cost;
 mod error;
 mod locate;
 mod recording;
@@ -24,6 +25,8 @@ use std::path::Path;
 pub use error::SceneError;
 pub use locate::Position;
 pub use recording::{FLUSH_EVERY, Recorder, Recording};
+pub use script::MAX_SCRIPT_STEPS;
+pub use validate::{MAX_METRES, MAX_SCENE_ELEMENTS, MIN_SPACING};
 pub use script::{Action, CutDepth, Point, Script};
 pub use types::{
     Cameras, Connective, Edge, FemMode, FemParams, Layer, LayerTissue, Pinning, Scene, SimulationSettings,
@@ -42,17 +45,72 @@ pub(crate) fn ron_options() -> ron::Options {
     ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
 }
 
-/// Reads a file to a string, as a [`SceneError::Io`] on failure.
+/// Largest scene, script or recording file read, bytes (64 MiB): a longer file is refused before it is
+/// read, so that `/dev/zero` or a runaway file cannot fill the memory.
+pub const MAX_FILE_BYTES: u64 = 64 << 20;
+
+/// Reads a scene, script or recording file: a regular file (not a device, pipe or directory) of at
+/// most [`MAX_FILE_BYTES`], in UTF-8. Errors name the file; invalid UTF-8 is reported at its line and
+/// column.
+pub fn read_file(path: impl AsRef<Path>) -> Result<String, SceneError> {
+    use std::io::Read;
+    let path = path.as_ref();
+    let io = |source| SceneError::Io { path: path.to_path_buf(), source };
+    let refuse = |why: String| io(std::io::Error::new(std::io::ErrorKind::InvalidInput, why));
+    // Checked before opening, so that a pipe does not block the open.
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(refuse(format!(
+            "not a regular file ({}), expected a RON file",
+            if meta.is_dir() { "a directory" } else { "a device, pipe or socket" }
+        )));
+    }
+    let too_long = |n: u64| {
+        refuse(format!(
+            "the file is {n} bytes long, more than the limit of {MAX_FILE_BYTES} bytes ({} MiB)",
+            MAX_FILE_BYTES >> 20
+        ))
+    };
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(too_long(meta.len()));
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    // A file that grows while it is read is still cut at the limit.
+    file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(too_long(bytes.len() as u64));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+        let last = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        let column = 1 + String::from_utf8_lossy(&valid[last..]).chars().count();
+        SceneError::Parse {
+            path: path.to_path_buf(),
+            line,
+            column,
+            message: "this byte is not UTF-8 text, expected a text file in UTF-8".to_owned(),
+        }
+    })
+}
+
 pub(crate) fn read(path: &Path) -> Result<String, SceneError> {
-    std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })
+    read_file(path)
 }
 
 impl Scene {
     /// Reads, parses and validates a scene file.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        Self::load_with_source(path).map(|(scene, _)| scene)
+    }
+
+    /// Reads, parses and validates a scene file, and gives its text too (what a recording keeps).
+    pub fn load_with_source(path: impl AsRef<Path>) -> Result<(Scene, String), SceneError> {
         let path = path.as_ref();
         let src = read(path)?;
-        Self::from_str(&src, path)
+        let scene = Self::from_str(&src, path)?;
+        Ok((scene, src))
     }
 
     /// Parses and validates a scene from text; `path` is used only in error messages.

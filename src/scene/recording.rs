@@ -23,7 +23,7 @@ use web_time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::error::parse_error;
+use super::error::{FieldPath, parse_error};
 use super::{Action, SceneError, Script};
 use crate::simulation::Command;
 
@@ -50,6 +50,35 @@ pub(crate) fn is_recording(src: &str) -> bool {
         .is_some_and(|l| l.starts_with("Recording("))
 }
 
+/// Whether a line of the action list holds whole actions: every bracket it opens closed (outside
+/// strings), and a comma after the last. A line cut after a comma inside a tuple does not.
+fn complete(line: &str) -> bool {
+    let mut depth = 0i64;
+    let mut in_string = false;
+    let mut escaped = false;
+    for c in line.chars() {
+        if in_string {
+            match (escaped, c) {
+                (true, _) => escaped = false,
+                (false, '\\') => escaped = true,
+                (false, '"') => in_string = false,
+                _ => {}
+            }
+            continue;
+        }
+        match c {
+            '"' => in_string = true,
+            '(' | '[' | '{' => depth += 1,
+            ')' | ']' | '}' => depth -= 1,
+            _ => {}
+        }
+        if depth < 0 {
+            return false;
+        }
+    }
+    depth == 0 && !in_string && line.trim_end().ends_with(',')
+}
+
 /// A recording cut short by a crash ends inside its action list: keep every complete action line and
 /// close the list.
 fn repaired(src: &str) -> String {
@@ -59,13 +88,10 @@ fn repaired(src: &str) -> String {
         if in_actions {
             let t = line.trim();
             if t.starts_with(']') {
-                // Complete file: keep the rest as it is.
-                out.push_str(line);
-                out.push('\n');
-                in_actions = false;
-                continue;
+                // The list is complete and the file is cut after it: close it as the recorder does.
+                break;
             }
-            if !t.ends_with(',') {
+            if !complete(t) {
                 break;
             }
         } else if line.trim_start().starts_with("actions:") {
@@ -89,22 +115,25 @@ impl Recording {
 
     /// Parses a recording from text (repairing a cut-off tail); `path` is for messages.
     pub fn from_str(src: &str, path: impl AsRef<Path>) -> Result<Recording, SceneError> {
-        let path = path.as_ref();
+        Self::parse(src, path.as_ref()).map(|(rec, _)| rec)
+    }
+
+    /// Parses and checks a recording; also gives the text it was read from (repaired when cut off), in
+    /// which errors about it are located.
+    pub(crate) fn parse(src: &str, path: &Path) -> Result<(Recording, String), SceneError> {
         let parsed = super::ron_options().from_str::<Recording>(src);
-        let rec = match parsed {
-            Ok(r) => r,
+        let (rec, text) = match parsed {
+            Ok(r) => (r, src.to_owned()),
             Err(e) => {
                 let fixed = repaired(src);
-                super::ron_options().from_str::<Recording>(&fixed).map_err(|_| parse_error(path, src, &e))?
+                match super::ron_options().from_str::<Recording>(&fixed) {
+                    Ok(r) => (r, fixed),
+                    Err(_) => return Err(parse_error(path, src, &e)),
+                }
             }
         };
-        rec.script().validate().map_err(|e| SceneError::Parse {
-            path: path.to_path_buf(),
-            line: 1,
-            column: 1,
-            message: format!("the recorded actions are not a valid script: {e}"),
-        })?;
-        Ok(rec)
+        rec.script().check(&FieldPath::default().f("actions")).map_err(|p| p.into_error(path, &text))?;
+        Ok((rec, text))
     }
 
     /// The recorded actions as a script.

@@ -12,7 +12,11 @@ use serde::{Deserialize, Serialize};
 use crate::snapshot::InstrumentKind;
 
 use super::error::{FieldPath, Problem, SceneError, parse_error, problem};
-use super::validate::finite;
+use super::validate::{finite, within};
+
+/// Longest script or recording, in steps: its last action must end by step 10 000 000 (2.8 hours at
+/// 1000 steps per second). `dissect run --steps` takes at most as many.
+pub const MAX_SCRIPT_STEPS: u64 = 10_000_000;
 
 /// A script: actions executed in order. RON: `Script([ Select(Forceps), ... ])`.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
@@ -123,13 +127,29 @@ impl Script {
             return super::Recording::from_str(src, path).map(|r| r.script());
         }
         let script: Script = super::ron_options().from_str(src).map_err(|e| parse_error(path, src, &e))?;
-        script.check().map_err(|p| p.into_error(path, src))?;
+        script.check(&FieldPath::default().inner()).map_err(|p| p.into_error(path, src))?;
         Ok(script)
     }
 
     /// Checks the script's values (as [`Script::load`] does), for scripts built in code (recordings).
     pub fn validate(&self) -> Result<(), SceneError> {
-        self.check().map_err(|p| p.into_error(Path::new("<script>"), ""))
+        self.check(&FieldPath::default().inner()).map_err(|p| p.into_error(Path::new("<script>"), ""))
+    }
+
+    /// What `dissect check --script` does: reads and checks a script or recording file; a recording's
+    /// scene (`scene_source`) is checked as a scene, and its actions against that scene.
+    pub fn check_file(path: impl AsRef<Path>) -> Result<(), SceneError> {
+        let path = path.as_ref();
+        let src = super::read(path)?;
+        if !super::recording::is_recording(&src) {
+            return Self::from_str(&src, path).map(|_| ());
+        }
+        let (rec, located) = super::Recording::parse(&src, path)?;
+        let scene_name = format!("{} (its scene_source)", path.display());
+        let scene = super::Scene::from_str(&rec.scene_source, scene_name)?;
+        rec.script()
+            .against(&scene, &FieldPath::default().f("actions"))
+            .map_err(|p| p.into_error(path, &located))
     }
 
     /// The script as pretty RON (one action per line), which [`Script::from_str`] reads back to an
@@ -176,44 +196,104 @@ impl Script {
 
     /// Checks that the script fits a scene: every instrument it selects is offered by the scene, and
     /// cuts at `Between` or `Lower` have two layers to cut. The message names the action (from 1).
+    /// Raw commands (`Command(..)`, `GraspElement`) are held to the same rules: an element or material
+    /// the scene has, a depth it can cut.
     pub fn check_against(&self, scene: &super::Scene) -> Result<(), String> {
+        self.against(scene, &FieldPath::default().inner()).map_err(|p| format!("{} {}", p.at.text(), p.message))
+    }
+
+    /// [`Script::check_against`], naming the action by its path under `list` (for line and column).
+    pub(crate) fn against(&self, scene: &super::Scene, list: &FieldPath) -> Result<(), Problem> {
+        use crate::instrument::Command as C;
+        use crate::simulation::Command as W;
         let layers = match &scene.tissue {
             super::Tissue::Layers(l) => l.layers.len(),
             super::Tissue::Volume(_) => 1,
         };
+        let materials = match &scene.tissue {
+            super::Tissue::Layers(l) => l.layers.len() + usize::from(l.layers.len() == 2 && l.connective.is_some()),
+            super::Tissue::Volume(_) => 1,
+        };
+        let elements = scene.element_count();
+        let title = &scene.title;
         for (i, a) in self.0.iter().enumerate() {
-            match a {
-                Action::Select(k) if !scene.instruments.contains(k) => {
-                    return Err(format!(
-                        "action {} selects the {k:?}, which the scene \"{}\" does not offer (it offers {:?})",
-                        i + 1,
-                        scene.title,
+            let at = list.i(i).with_text(format!("action {} ({})", i + 1, name(a)));
+            let fem = matches!(&scene.tissue, super::Tissue::Volume(v) if matches!(v.model, super::VolumeModel::Fem(_)));
+            let select = match a {
+                Action::Select(k) | Action::Command(W::Instrument(C::Select(k))) => Some(*k),
+                _ => None,
+            };
+            let depth = match a {
+                Action::Cut { depth, .. } | Action::Command(W::Instrument(C::SetDepth(depth))) => Some(*depth),
+                _ => None,
+            };
+            let element = match a {
+                Action::GraspElement(e)
+                | Action::Command(W::Instrument(C::GraspElement(crate::chainmail::ElementId(e)))) => Some(*e),
+                _ => None,
+            };
+            if let Some(k) = select
+                && !scene.instruments.contains(&k)
+            {
+                return problem(
+                    &at,
+                    format!(
+                        "selects the {k:?}, which the scene \"{title}\" does not offer (it offers {:?})",
                         scene.instruments
-                    ));
-                }
-                Action::Cut { .. } if matches!(&scene.tissue, super::Tissue::Volume(v) if matches!(v.model, super::VolumeModel::Fem(_))) =>
-                {
-                    return Err(format!("action {} cuts: {}", i + 1, crate::tissue::FEM_CUT_REFUSED));
-                }
-                Action::Cut { depth: d @ (CutDepth::Between | CutDepth::Lower), .. } if layers < 2 => {
-                    return Err(format!(
-                        "action {} cuts at depth {d:?}, but the scene \"{}\" has one layer; expected `Upper`",
-                        i + 1,
-                        scene.title
-                    ));
-                }
-                _ => {}
+                    ),
+                );
+            }
+            if matches!(a, Action::Cut { .. }) && fem {
+                return problem(&at, format!("cuts: {}", crate::tissue::FEM_CUT_REFUSED));
+            }
+            if let Some(d @ (CutDepth::Between | CutDepth::Lower)) = depth
+                && layers < 2
+            {
+                return problem(
+                    &at,
+                    format!("cuts at depth {d:?}, but the scene \"{title}\" has one layer; expected `Upper`"),
+                );
+            }
+            if let Some(e) = element
+                && u128::from(e) >= elements
+            {
+                return problem(
+                    &at,
+                    format!("grasps element {e}, but the scene \"{title}\" has {elements} elements (0 to {})", elements.saturating_sub(1)),
+                );
+            }
+            if let Action::Command(W::SetMaterial(id, _)) = a
+                && usize::from(id.0) >= materials
+            {
+                return problem(
+                    &at,
+                    format!("sets material {}, but the scene \"{title}\" has {materials} material(s) (0 to {})", id.0, materials - 1),
+                );
             }
         }
         Ok(())
     }
 
-    fn check(&self) -> Result<(), Problem> {
-        let list = FieldPath::default().inner();
+    pub(crate) fn check(&self, list: &FieldPath) -> Result<(), Problem> {
         let mut last_at: Option<u64> = None;
         let mut held: Option<InstrumentKind> = None;
+        // When the action before this one ends, in steps.
+        let mut t = 0u64;
         for (i, a) in self.0.iter().enumerate() {
             let at = list.i(i).with_text(format!("action {} ({})", i + 1, name(a)));
+            t = match a {
+                Action::At(n) => t.max(*n),
+                other => t.saturating_add(other.steps()),
+            };
+            if t > MAX_SCRIPT_STEPS {
+                return problem(
+                    &at.inner(),
+                    format!(
+                        "ends at step {t}, expected at most {MAX_SCRIPT_STEPS}: the longest script or recording \
+                         (see scenes/README.md)"
+                    ),
+                );
+            }
             let need = |kind: InstrumentKind, held: Option<InstrumentKind>| {
                 if held == Some(kind) {
                     Ok(())
@@ -247,6 +327,7 @@ impl Script {
                     if let crate::simulation::Command::Instrument(crate::instrument::Command::Select(k)) = c {
                         held = Some(*k);
                     }
+                    command(&at.inner(), c)?;
                 }
                 Action::Cut { path, steps, .. } => {
                     need(InstrumentKind::Scalpel, held)?;
@@ -304,6 +385,52 @@ fn steps_at_least_1(at: &FieldPath, n: u32) -> Result<(), Problem> {
     if n >= 1 { Ok(()) } else { problem(at, "is 0 steps, expected at least 1") }
 }
 
+/// A raw command holds to what the actions hold to: finite points within reach, a usable material, the
+/// sweep cap of scenes.
+fn command(at: &FieldPath, c: &crate::simulation::Command) -> Result<(), Problem> {
+    use crate::instrument::Command as C;
+    use crate::simulation::Command as W;
+    let inner = at.inner();
+    let c = match c {
+        W::SetMaterial(_, m) => return super::validate::material(&at.i(1), m),
+        W::SetRelaxSweeps(n) if *n > 1000 => {
+            return problem(&inner, format!("is {n}, expected at most 1000 sweeps per step"));
+        }
+        W::SetRelaxSweeps(_) => return Ok(()),
+        W::Instrument(c) => c,
+    };
+    match c {
+        C::MoveTo(p) => {
+            for (k, &x) in p.iter().enumerate() {
+                within(&inner.i(k).with_text(format!("{}: {}", at.text(), ["x", "y", "z"][k])), x)?;
+            }
+        }
+        C::SetAxis(a) => {
+            for (k, &x) in a.iter().enumerate() {
+                finite(&inner.i(k), x)?;
+            }
+            let l = a.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>().sqrt();
+            if !(l > 1e-6 && l < 1e6) {
+                return problem(at, format!("is an axis of length {l}, expected a direction (length about 1)"));
+            }
+        }
+        C::Roll(r) => {
+            finite(&inner, *r)?;
+            if r.abs() > 1e3 {
+                return problem(&inner, format!("is {r}, expected an angle in radians within ±1000"));
+            }
+        }
+        C::Select(_)
+        | C::Grasp
+        | C::GraspElement(_)
+        | C::Release
+        | C::SetDepth(_)
+        | C::BeginCut
+        | C::EndCut => {}
+    }
+    Ok(())
+}
+
 fn point(at: &FieldPath, p: &Point) -> Result<(), Problem> {
     let t = at.text().to_owned();
     let inner = at.inner();
@@ -316,11 +443,11 @@ fn point(at: &FieldPath, p: &Point) -> Result<(), Problem> {
                     return problem(&a, format!("is {x}, expected a fraction of the surface in [0, 1]"));
                 }
             }
-            finite(&inner.i(2).with_text(format!("{t}: the normal offset")), h)?;
+            within(&inner.i(2).with_text(format!("{t}: the normal offset")), h)?;
         }
         Point::World(x, y, z) => {
             for (k, c) in [x, y, z].into_iter().enumerate() {
-                finite(&inner.i(k).with_text(format!("{t}: {}", ["x", "y", "z"][k])), c)?;
+                within(&inner.i(k).with_text(format!("{t}: {}", ["x", "y", "z"][k])), c)?;
             }
         }
     }

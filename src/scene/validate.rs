@@ -1,7 +1,7 @@
 //! Semantic checks of a deserialized scene. Each check names the offending field by its path, so that
 //! the loader can point at its line and column.
 
-use crate::chainmail::{Limits, MAX_ELEMENTS, Material};
+use crate::chainmail::{Limits, Material};
 use crate::snapshot::CameraSpec;
 
 use super::error::{FieldPath, Problem, problem};
@@ -67,8 +67,26 @@ pub(crate) fn finite(at: &FieldPath, x: f32) -> Result<f32, Problem> {
     if x.is_finite() { Ok(x) } else { problem(at, format!("is {x}, expected a finite number")) }
 }
 
-fn positive(at: &FieldPath, x: f32, unit: &str) -> Result<f32, Problem> {
+/// Largest length or coordinate in a scene, script or recording, metres: sizes, offsets, camera and
+/// instrument positions all lie within ±100 m, so that no sum or square of them overflows.
+pub const MAX_METRES: f32 = 100.0;
+
+/// Smallest distance between neighbouring elements at rest, metres (a micrometre): closer elements
+/// would make links of no length.
+pub const MIN_SPACING: f32 = 1e-6;
+
+/// A finite coordinate or length within ±[`MAX_METRES`].
+pub(crate) fn within(at: &FieldPath, x: f32) -> Result<f32, Problem> {
     finite(at, x)?;
+    if x.abs() <= MAX_METRES {
+        Ok(x)
+    } else {
+        problem(at, format!("is {x}, expected at most {MAX_METRES} metres either way"))
+    }
+}
+
+fn positive(at: &FieldPath, x: f32, unit: &str) -> Result<f32, Problem> {
+    within(at, x)?;
     if x > 0.0 { Ok(x) } else { problem(at, format!("is {x}, expected a positive length in {unit}")) }
 }
 
@@ -85,14 +103,21 @@ fn color(at: &FieldPath, c: [f32; 4]) -> Result<(), Problem> {
     Ok(())
 }
 
+/// Most elements a scene may have, in all its layers (a 1024 × 1024 sheet): about 300 MiB of
+/// simulation state, a renderer's largest buffer (24 bytes an element, the triangle indices) at 24 MiB,
+/// well inside the 256 MiB every device offers, and built, stepped and drawn in CI (the engine itself
+/// takes up to [`crate::chainmail::MAX_ELEMENTS`]).
+pub const MAX_SCENE_ELEMENTS: usize = 1 << 20;
+
 fn element_limit(at: &FieldPath, count: u128, what: String) -> Result<(), Problem> {
-    if count > MAX_ELEMENTS as u128 {
-        let mib = (MAX_ELEMENTS / (1 << 20) * crate::chainmail::BYTES_PER_ELEMENT) as u128;
+    const MAX: usize = MAX_SCENE_ELEMENTS;
+    if count > MAX as u128 {
+        let mib = (MAX / (1 << 20) * crate::chainmail::BYTES_PER_ELEMENT) as u128;
         return problem(
             at,
             format!(
-                "is {what}: {count} elements, more than the limit of {MAX_ELEMENTS} elements (about {mib} MiB of \
-                 simulation state); expected at most {MAX_ELEMENTS} elements in all"
+                "is {what}: {count} elements, more than the limit of {MAX} elements (about {mib} MiB of \
+                 simulation state); expected at most {MAX} elements in all"
             ),
         );
     }
@@ -130,11 +155,11 @@ pub(crate) fn material(at: &FieldPath, m: &Material) -> Result<(), Problem> {
         }
         Limits::Absolute { min_dist, max_dist, max_shear } => {
             let a = lim.f("min_dist");
-            if finite(&a, min_dist)? <= 0.0 {
+            if within(&a, min_dist)? <= 0.0 {
                 return problem(&a, format!("is {min_dist}, expected a positive length in metres"));
             }
             let b = lim.f("max_dist");
-            if finite(&b, max_dist)? < min_dist {
+            if within(&b, max_dist)? < min_dist {
                 return problem(&b, format!("is {max_dist}, expected at least min_dist ({min_dist})"));
             }
             let a = lim.f("max_shear");
@@ -268,7 +293,7 @@ fn layers(l: &LayerTissue, at: &FieldPath) -> Result<(), Problem> {
         }
         color(&a.f("color"), layer.color)?;
         let off = a.f("offset");
-        finite(&off, layer.offset)?;
+        within(&off, layer.offset)?;
         match l.surface {
             Surface::Cylinder { radius, .. } | Surface::Sphere { radius } if layer.offset <= -radius => {
                 return problem(
@@ -298,10 +323,75 @@ fn layers(l: &LayerTissue, at: &FieldPath) -> Result<(), Problem> {
             ),
         );
     }
+    spacing(l, at)?;
     if let Some(c) = &l.connective {
         connective(&at.f("connective"), c, l)?;
     }
     pinning(&at.f("pinned"), &l.pinned, wraps)
+}
+
+/// The closest two neighbouring elements may be at rest, metres: a micrometre, and at least a
+/// millionth of the tissue's size (single-precision coordinates resolve about a ten-millionth).
+fn min_spacing(extent: f64) -> f64 {
+    f64::from(MIN_SPACING).max(1e-6 * extent)
+}
+
+/// Neighbouring elements far enough apart to make links: what building the tissue needs, checked here
+/// so that `dissect check` finds it (at `u_coords` / `v_coords`, or at `resolution` when evenly spaced).
+fn spacing(l: &LayerTissue, at: &FieldPath) -> Result<(), Problem> {
+    use std::f64::consts::PI;
+    let gap = |f: &[f32], wraps: bool| -> (f64, usize) {
+        let mut best = (f64::INFINITY, 0);
+        for (i, w) in f.windows(2).enumerate() {
+            let d = f64::from(w[1]) - f64::from(w[0]);
+            if d < best.0 {
+                best = (d, i + 1);
+            }
+        }
+        if wraps && let (Some(&a), Some(&b)) = (f.first(), f.last()) {
+            let d = 1.0 + f64::from(a) - f64::from(b);
+            if d < best.0 {
+                best = (d, 0);
+            }
+        }
+        best
+    };
+    let (fu, fv) = (l.u_fractions(), l.v_fractions());
+    let (du, iu) = gap(&fu, l.surface.wraps_u());
+    let (dv, iv) = gap(&fv, false);
+    let low = l.layers.iter().map(|x| f64::from(x.offset)).fold(f64::INFINITY, f64::min).min(0.0);
+    let (span_u, span_v, extent) = match l.surface {
+        Surface::Plane { width, depth } | Surface::Box { width, depth, .. } => {
+            (f64::from(width), f64::from(depth), f64::from(width.max(depth)))
+        }
+        Surface::Cylinder { radius, length } => {
+            let r = f64::from(radius) + low;
+            (2.0 * PI * r, f64::from(length), (2.0 * PI * f64::from(radius)).max(f64::from(length)))
+        }
+        Surface::Sphere { radius } => {
+            let r = f64::from(radius) + low;
+            // The shortest ring is the one nearest a pole.
+            let ring = fv.iter().map(|&v| (PI * f64::from(v)).sin()).fold(f64::INFINITY, f64::min);
+            (2.0 * PI * r * ring, PI * r, 2.0 * PI * f64::from(radius))
+        }
+    };
+    let least = min_spacing(extent);
+    for (d, span, i, name, coords) in
+        [(du * span_u, span_u, iu, "u_coords", &l.u_coords), (dv * span_v, span_v, iv, "v_coords", &l.v_coords)]
+    {
+        if d < least {
+            let field = if coords.is_some() { at.f(name).inner().i(i) } else { at.f("resolution") };
+            let axis = &name[..1];
+            return problem(
+                &field,
+                format!(
+                    "puts neighbouring elements {d:.3e} m apart along {axis} (over {span:.3e} m), expected at \
+                     least {least:.1e} m: closer elements make links of no length"
+                ),
+            );
+        }
+    }
+    Ok(())
 }
 
 fn connective(at: &FieldPath, c: &Connective, l: &LayerTissue) -> Result<(), Problem> {
@@ -380,12 +470,59 @@ fn volume(v: &VolumeTissue, at: &FieldPath) -> Result<(), Problem> {
     }
     let [x, y, z] = v.resolution;
     element_limit(&res, v.resolution.iter().map(|&n| u128::from(n)).product(), format!("({x}, {y}, {z})"))?;
+    let h: Vec<f64> = (0..3).map(|k| f64::from(v.size[k]) / f64::from(v.resolution[k] - 1)).collect();
+    let least = min_spacing(v.size.iter().map(|&s| f64::from(s)).fold(0.0, f64::max));
+    for (k, &d) in h.iter().enumerate() {
+        if d < least {
+            return problem(
+                &res.i(k),
+                format!("puts neighbouring elements {d:.3e} m apart, expected at least {least:.1e} m"),
+            );
+        }
+    }
     material(&at.f("material"), &v.material)?;
     color(&at.f("color"), v.color)?;
     if let VolumeModel::Fem(f) = &v.model {
+        // What loading the model needs: one spacing along every axis, and its dense matrices within
+        // the memory limit.
+        if h.iter().any(|x| (x - h[0]).abs() > 1e-4 * h[0]) {
+            return problem(
+                &size,
+                format!(
+                    "gives the elements spacings ({:.4}, {:.4}, {:.4}) m along x, y and z, expected one spacing \
+                     (size over resolution − 1 equal along every axis) for a finite-element block",
+                    h[0], h[1], h[2]
+                ),
+            );
+        }
+        let bytes = fem_bytes(v.resolution, matches!(f.mode, super::types::FemMode::Dynamic));
+        let limit = crate::fem::DEFAULT_MEMORY_LIMIT as f64;
+        if bytes > limit {
+            return problem(
+                &res,
+                format!(
+                    "is ({x}, {y}, {z}): a finite-element block this fine needs about {:.0} MiB of dense matrices, \
+                     more than the limit of {:.0} MiB; expected fewer nodes (16 along each axis need about 165 MiB)",
+                    bytes / f64::from(1u32 << 20),
+                    limit / f64::from(1u32 << 20)
+                ),
+            );
+        }
         fem(&at.f("model").inner(), f)?;
     }
     Ok(())
+}
+
+/// Bytes of the dense matrices a finite-element block of `dims` nodes needs, base clamped (as
+/// `FemModel::load` counts them, the larger of the static and the dynamic inverse).
+fn fem_bytes(dims: [u32; 3], dynamic: bool) -> f64 {
+    let [x, y, z] = dims.map(f64::from);
+    let interior = (x - 2.0).max(0.0) * (y - 2.0).max(0.0) * (z - 2.0).max(0.0);
+    let boundary = x * y * z - interior;
+    let free_surface = 3.0 * (boundary - x * z);
+    let load = 2.0 * free_surface * free_surface * 8.0 + 3.0 * interior * 64.0 * 8.0;
+    let dynamic_inverse = free_surface * free_surface * 8.0;
+    if dynamic { load.max(dynamic_inverse) } else { load }
 }
 
 fn fem(at: &FieldPath, f: &FemParams) -> Result<(), Problem> {
@@ -424,7 +561,7 @@ fn camera(at: &FieldPath, c: &CameraSpec) -> Result<(), Problem> {
     for (name, p) in [("eye", c.eye), ("target", c.target)] {
         let a = at.f(if name == "eye" { "eye" } else { "target" });
         for (i, x) in p.into_iter().enumerate() {
-            finite(&a.i(i), x)?;
+            within(&a.i(i), x)?;
         }
     }
     if c.eye == c.target {

@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 
 /// A base surface. Sizes in metres; the surface is centred on the origin with Y up.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
 pub enum Surface {
     /// A horizontal rectangle in the XZ plane at y = 0, normal +Y.
     Plane {

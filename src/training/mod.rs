@@ -17,6 +17,7 @@ use crate::tissue::{LinkKind, Tissue};
 
 /// A region of the tissue's surface, in fractions of the `u` and `v` extents (`0` to `1`).
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
 pub enum Region {
     /// A rectangle: `u` from `u.0` to `u.1`, `v` from `v.0` to `v.1`.
     Rect {
