@@ -56,9 +56,9 @@ fn misspelt_field() {
 
 #[test]
 fn misspelt_field_of_the_limits() {
-    // `Relative` ignores unknown fields, so RON reports `max_stretch` missing; point at the misspelling.
+    // `Relative` refuses unknown fields (it once ignored them, and RON reported `max_stretch` missing).
     let e = load("max_stretch: 1.3", "max_strech: 1.3");
-    expect(e, "8:42", &["unknown field `max_strech`", "expected `max_stretch`"]);
+    expect(e, "8:42", &["unknown field `max_strech`", "did you mean `max_stretch`?"]);
 }
 
 #[test]

@@ -51,9 +51,14 @@ pub(crate) struct Tree {
 /// Deepest nesting followed; RON itself refuses deeper sources.
 const MAX_DEPTH: usize = 256;
 
-/// Most values kept in a tree (about 30 MiB): values beyond them are read but not kept, so a huge list
-/// costs no memory here, and an error in one points at the deepest value kept on its way.
+/// Most values kept in a tree (about 30 MiB): list items beyond them are read but not kept, so a huge
+/// list costs no memory here, and an error in one points at the list. Struct fields and tuple items
+/// are always kept up to [`ALWAYS_KEPT`] per struct or tuple, so that the way to a value after a huge
+/// list is still found.
 const MAX_NODES: usize = 1 << 18;
+
+/// Fields of a struct, or items of a tuple, kept past [`MAX_NODES`] (schemas have fewer).
+const ALWAYS_KEPT: usize = 16;
 
 impl Tree {
     /// Parses as much of `src` as it can.
@@ -149,10 +154,11 @@ impl Parser<'_> {
         self.src[self.i..].chars().nth(k)
     }
 
-    /// Whether another value may be kept; counts it.
-    fn keep(&mut self) -> bool {
+    /// Whether another value, the `index`th of its struct, tuple (`short`) or list, may be kept;
+    /// counts it.
+    fn keep(&mut self, index: usize, short: bool) -> bool {
         self.nodes += 1;
-        self.nodes <= MAX_NODES
+        self.nodes <= MAX_NODES || (short && index < ALWAYS_KEPT)
     }
 
     fn bump(&mut self) -> Option<char> {
@@ -422,7 +428,7 @@ impl Parser<'_> {
                     return None;
                 }
                 let value = self.value(depth + 1)?;
-                if self.keep() {
+                if self.keep(fields.len(), true) {
                     fields.push((name, at, value));
                 }
                 self.skip_ws();
@@ -463,7 +469,7 @@ impl Parser<'_> {
                 return Some(items);
             }
             let v = self.value(depth + 1)?;
-            if self.keep() {
+            if self.keep(items.len(), end == ')') {
                 items.push(v);
             }
             self.skip_ws();
@@ -508,16 +514,18 @@ mod tests {
     #[test]
     fn a_huge_list_keeps_a_bounded_tree() {
         let n = MAX_NODES + 10;
-        let src = format!("(a: [{}], b: 7)", "0.5, ".repeat(n));
+        let src = format!("(t: ((a: [{}],\n b: (7, 8))))", "0.5, ".repeat(n));
         // Items past the limit are not kept: their path ends at the list.
-        assert_eq!(at(&src, &[Seg::Field("a"), Seg::Index(n - 1)]), (1, 5));
-        assert_eq!(at(&src, &[Seg::Field("a"), Seg::Index(3)]), (1, 21));
-        let _ = at(&src, &[Seg::Field("b")]);
+        let a = [Seg::Field("t"), Seg::Field("a")];
+        assert_eq!(at(&src, &[a[0], a[1], Seg::Index(n - 1)]), (1, 10));
+        assert_eq!(at(&src, &[a[0], a[1], Seg::Index(3)]), (1, 26));
+        // What follows the list is still found, and the list itself.
+        assert_eq!(at(&src, &[Seg::Field("t"), Seg::Field("b"), Seg::Index(1)]), (2, 9));
     }
 
     #[test]
     fn columns_count_characters_not_bytes() {
-        assert_eq!(at("(é: \"ü\", a: 1)", &[Seg::Field("a")]), (1, 14));
+        assert_eq!(at("(é: \"ü\", a: 1)", &[Seg::Field("a")]), (1, 13));
     }
 
     #[test]
