@@ -357,7 +357,10 @@ fn record_apart(record: Option<&Path>, inputs: &[&Path]) -> anyhow::Result<()> {
 /// simulated.
 fn writable_dir(dir: &Path) -> anyhow::Result<()> {
     if dir.exists() && !dir.is_dir() {
-        anyhow::bail!("{}: is not a directory, expected a directory for the results (--out DIR)", dir.display());
+        anyhow::bail!(
+            "{}: is not a directory, expected a directory for the results (--out DIR)",
+            dir.display()
+        );
     }
     std::fs::create_dir_all(dir)
         .map_err(|e| anyhow::anyhow!("{}: cannot create the output directory: {e}", dir.display()))?;

@@ -207,7 +207,8 @@ fn class06_raw_commands_are_checked() {
         let e = script_error(src);
         assert!(e.contains(says), "{src}: {e}");
     }
-    let one_layer = Scene::from_str(&plane((8, 8), "  instruments: [Forceps, Probe],\n"), "p.ron").expect("scene");
+    let one_layer =
+        Scene::from_str(&plane((8, 8), "  instruments: [Forceps, Probe],\n"), "p.ron").expect("scene");
     for (src, says) in [
         ("Script([Command(Select(Scalpel)), Command(BeginCut)])", "does not offer"),
         ("Script([Command(SetDepth(Lower))])", "one layer"),
@@ -242,8 +243,9 @@ fn class06_raw_commands_are_checked() {
 fn class07_cut_recordings_read_to_their_last_complete_line() {
     let dir = tmp("class07");
     let path = dir.join("rec.ron");
-    let mut rec = dissect::scene::Recorder::create(&path, "scenes/meninges.ron", dissect::scene::DEFAULT_SCENE)
-        .expect("recorder");
+    let mut rec =
+        dissect::scene::Recorder::create(&path, "scenes/meninges.ron", dissect::scene::DEFAULT_SCENE)
+            .expect("recorder");
     use dissect::instrument::Command as C;
     let commands = [
         C::Select(dissect::simulation::InstrumentKind::Forceps),

@@ -126,8 +126,9 @@ fn recording() -> &'static str {
         let script = Script::from_str(SCRIPTS[0], "meninges.ron").expect("bundled script");
         let mut rec =
             dissect::scene::Recorder::create(&path, "scenes/meninges.ron", SCENES[0]).expect("recorder");
-        let out = dissect::runner::run(&scene, "meninges.ron", &script, "script.ron", Some(400), Some(&mut rec))
-            .expect("runs");
+        let out =
+            dissect::runner::run(&scene, "meninges.ron", &script, "script.ron", Some(400), Some(&mut rec))
+                .expect("runs");
         rec.finish(out.world.step_count()).expect("finish");
         let text = std::fs::read_to_string(&path).expect("read");
         let _ = std::fs::remove_file(&path);
@@ -218,7 +219,7 @@ proptest! {
         while !text.is_char_boundary(cut) {
             cut -= 1;
         }
-        feed(text[..cut].as_bytes());
+        feed(&text.as_bytes()[..cut]);
     }
 
     #[test]

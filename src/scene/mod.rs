@@ -26,12 +26,12 @@ pub use error::SceneError;
 pub use locate::Position;
 pub use recording::{FLUSH_EVERY, Recorder, Recording};
 pub use script::MAX_SCRIPT_STEPS;
-pub use validate::{MAX_METRES, MAX_SCENE_ELEMENTS, MIN_SPACING};
 pub use script::{Action, CutDepth, Point, Script};
 pub use types::{
     Cameras, Connective, Edge, FemMode, FemParams, Layer, LayerTissue, Pinning, Scene, SimulationSettings,
     Surface, Tissue, VolumeModel, VolumePinning, VolumeTissue,
 };
+pub use validate::{MAX_METRES, MAX_SCENE_ELEMENTS, MIN_SPACING};
 
 /// The default exercise (`scenes/meninges.ron`), built into the binary.
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/meninges.ron");

@@ -199,7 +199,8 @@ impl Script {
     /// Raw commands (`Command(..)`, `GraspElement`) are held to the same rules: an element or material
     /// the scene has, a depth it can cut.
     pub fn check_against(&self, scene: &super::Scene) -> Result<(), String> {
-        self.against(scene, &FieldPath::default().inner()).map_err(|p| format!("{} {}", p.at.text(), p.message))
+        self.against(scene, &FieldPath::default().inner())
+            .map_err(|p| format!("{} {}", p.at.text(), p.message))
     }
 
     /// [`Script::check_against`], naming the action by its path under `list` (for line and column).
@@ -211,7 +212,9 @@ impl Script {
             super::Tissue::Volume(_) => 1,
         };
         let materials = match &scene.tissue {
-            super::Tissue::Layers(l) => l.layers.len() + usize::from(l.layers.len() == 2 && l.connective.is_some()),
+            super::Tissue::Layers(l) => {
+                l.layers.len() + usize::from(l.layers.len() == 2 && l.connective.is_some())
+            }
             super::Tissue::Volume(_) => 1,
         };
         let elements = scene.element_count();
@@ -224,7 +227,9 @@ impl Script {
                 _ => None,
             };
             let depth = match a {
-                Action::Cut { depth, .. } | Action::Command(W::Instrument(C::SetDepth(depth))) => Some(*depth),
+                Action::Cut { depth, .. } | Action::Command(W::Instrument(C::SetDepth(depth))) => {
+                    Some(*depth)
+                }
                 _ => None,
             };
             let element = match a {
@@ -259,7 +264,10 @@ impl Script {
             {
                 return problem(
                     &at,
-                    format!("grasps element {e}, but the scene \"{title}\" has {elements} elements (0 to {})", elements.saturating_sub(1)),
+                    format!(
+                        "grasps element {e}, but the scene \"{title}\" has {elements} elements (0 to {})",
+                        elements.saturating_sub(1)
+                    ),
                 );
             }
             if let Action::Command(W::SetMaterial(id, _)) = a
@@ -267,7 +275,11 @@ impl Script {
             {
                 return problem(
                     &at,
-                    format!("sets material {}, but the scene \"{title}\" has {materials} material(s) (0 to {})", id.0, materials - 1),
+                    format!(
+                        "sets material {}, but the scene \"{title}\" has {materials} material(s) (0 to {})",
+                        id.0,
+                        materials - 1
+                    ),
                 );
             }
         }
@@ -411,7 +423,10 @@ fn command(at: &FieldPath, c: &crate::simulation::Command) -> Result<(), Problem
             }
             let l = a.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>().sqrt();
             if !(l > 1e-6 && l < 1e6) {
-                return problem(at, format!("is an axis of length {l}, expected a direction (length about 1)"));
+                return problem(
+                    at,
+                    format!("is an axis of length {l}, expected a direction (length about 1)"),
+                );
             }
         }
         C::Roll(r) => {

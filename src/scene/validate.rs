@@ -376,9 +376,10 @@ fn spacing(l: &LayerTissue, at: &FieldPath) -> Result<(), Problem> {
         }
     };
     let least = min_spacing(extent);
-    for (d, span, i, name, coords) in
-        [(du * span_u, span_u, iu, "u_coords", &l.u_coords), (dv * span_v, span_v, iv, "v_coords", &l.v_coords)]
-    {
+    for (d, span, i, name, coords) in [
+        (du * span_u, span_u, iu, "u_coords", &l.u_coords),
+        (dv * span_v, span_v, iv, "v_coords", &l.v_coords),
+    ] {
         if d < least {
             let field = if coords.is_some() { at.f(name).inner().i(i) } else { at.f("resolution") };
             let axis = &name[..1];
