@@ -124,11 +124,12 @@ fn recording() -> &'static str {
         let path = dir.join(format!("recording-{}.ron", std::process::id()));
         let scene = Scene::from_str(SCENES[0], "meninges.ron").expect("bundled scene");
         let script = Script::from_str(SCRIPTS[0], "meninges.ron").expect("bundled script");
-        let mut rec =
+        let rec =
             dissect::scene::Recorder::create(&path, "scenes/meninges.ron", SCENES[0]).expect("recorder");
-        let out =
-            dissect::runner::run(&scene, "meninges.ron", &script, "script.ron", Some(400), Some(&mut rec))
+        let mut out =
+            dissect::runner::run(&scene, "meninges.ron", &script, "script.ron", Some(400), Some(rec))
                 .expect("runs");
+        let rec = out.recorder.take().expect("the recorder comes back");
         rec.finish(out.world.step_count()).expect("finish");
         let text = std::fs::read_to_string(&path).expect("read");
         let _ = std::fs::remove_file(&path);

@@ -6,9 +6,11 @@
 
 mod episode;
 mod player;
+mod stats;
 
 pub use episode::{Advance, Episode, Source};
 pub use player::{Player, resolve};
+pub use stats::StepTimes;
 
 use serde::Serialize;
 
@@ -71,21 +73,23 @@ pub struct Metrics {
 /// Gathers the figures step by step.
 #[derive(Clone, Debug, Default)]
 pub struct MetricsRecorder {
-    times: Vec<f32>,
+    times: StepTimes,
     phases: [f64; 6],
     max_stretch: f32,
 }
 
 impl MetricsRecorder {
-    /// A recorder with room for `steps` samples.
+    /// A recorder. Its memory is fixed (the step times go into a histogram, [`StepTimes`]), whatever
+    /// `steps` says: the argument is kept for callers that size it.
     pub fn with_capacity(steps: usize) -> Self {
-        Self { times: Vec::with_capacity(steps), phases: [0.0; 6], max_stretch: 1.0 }
+        let _ = steps;
+        Self { times: StepTimes::new(), phases: [0.0; 6], max_stretch: 1.0 }
     }
 
     /// Call after each step.
     pub fn observe(&mut self, world: &World) {
         let c = world.last_step();
-        self.times.push(c.total_us());
+        self.times.record(c.total_us());
         for (acc, t) in self.phases.iter_mut().zip(c.phase_us) {
             *acc += t as f64;
         }
@@ -95,15 +99,14 @@ impl MetricsRecorder {
     /// The figures so far.
     pub fn metrics(&self, world: &World) -> Metrics {
         let d = world.tissue().damage();
-        let n = self.times.len().max(1) as f64;
-        let mut times = self.times.clone();
+        let n = self.times.count().max(1) as f64;
         Metrics {
             steps: world.step_count(),
             elements_moved_total: world.elements_moved_total(),
             links_cut: d.layer_links_cut + d.connective_links_cut,
             links_torn: d.links_torn,
             max_stretch: self.max_stretch,
-            step_time_us: TimeStats::of(&mut times),
+            step_time_us: self.times.stats(),
             phase_time_us: crate::simulation::PHASES
                 .iter()
                 .zip(self.phases)
