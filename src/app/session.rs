@@ -153,6 +153,11 @@ impl Session {
         let episode = build(&scene, &scene_label, source)?;
         let mut snapshot = Snapshot::default();
         episode.snapshot_into(&mut snapshot);
+        // A scene that cannot keep up is said once, in the window and the log.
+        let warning = scene.cost_warning().map(|w| {
+            eprintln!("dissect: {scene_label}: warning: {w}");
+            (format!("warning: {w}"), Instant::now())
+        });
         Ok(Self {
             scene,
             scene_source,
@@ -165,7 +170,7 @@ impl Session {
             timing: Timing::default(),
             watch: None,
             scene_error: None,
-            message: None,
+            message: warning,
             started: Instant::now(),
             dropped: false,
         })
@@ -176,7 +181,7 @@ impl Session {
     pub fn live(path: Option<&Path>, record: PathBuf) -> Result<Self, AppError> {
         let (source, label) = match path {
             Some(p) => (
-                std::fs::read_to_string(p).map_err(|e| AppError::Scene(format!("{}: {e}", p.display())))?,
+                crate::scene::read_file(p).map_err(|e| AppError::Scene(e.to_string()))?,
                 p.display().to_string(),
             ),
             None => (DEFAULT_SCENE.to_string(), DEFAULT_SCENE_PATH.to_string()),
@@ -194,6 +199,11 @@ impl Session {
         let recording = Recording::load(path).map_err(|e| AppError::Scene(e.to_string()))?;
         let scene = Scene::from_str(&recording.scene_source, &recording.scene)
             .map_err(|e| AppError::Scene(format!("the recorded scene: {e}")))?;
+        // A tampered recording can do no more than its scene allows.
+        recording
+            .script()
+            .check_against(&scene)
+            .map_err(|e| AppError::Scene(format!("{}: {e}", path.display())))?;
         let commands = recording.actions.iter().filter(|a| matches!(a, ScriptAction::Command(_))).count();
         let driver = Driver::Replay { commands, label: path.display().to_string() };
         let source = Source::Script(Player::new(recording.actions));
@@ -205,6 +215,9 @@ impl Session {
         let script = crate::scene::Script::load(script_path).map_err(|e| AppError::Scene(e.to_string()))?;
         // An empty recording path: nothing is recorded.
         let mut session = Self::live(scene_path, PathBuf::new())?;
+        script
+            .check_against(&session.scene)
+            .map_err(|e| AppError::Scene(format!("{}: {e}", script_path.display())))?;
         let commands = script.0.iter().filter(|a| matches!(a, ScriptAction::Command(_))).count();
         session.driver = Driver::Replay { commands, label: script_path.display().to_string() };
         session.episode.set_source(Source::Script(Player::new(script.0)));
@@ -396,11 +409,7 @@ impl Session {
             return false;
         }
         let loaded = match &self.watch {
-            Some(w) => Scene::load(&w.path).and_then(|s| {
-                std::fs::read_to_string(&w.path)
-                    .map(|src| (s, src))
-                    .map_err(|source| crate::scene::SceneError::Io { path: w.path.clone(), source })
-            }),
+            Some(w) => Scene::load_with_source(&w.path),
             None => {
                 Scene::from_str(&self.scene_source, &self.scene_label).map(|s| (s, self.scene_source.clone()))
             }
