@@ -19,7 +19,7 @@ impl Tissue {
         while out.len() < nl {
             out.push(LayerMesh { topology_version: u64::MAX, ..LayerMesh::default() });
         }
-        let volume = matches!(self.geometry, Geometry::Volume) || self.fem.is_some();
+        let volume = matches!(self.geometry, Geometry::Volume) || self.is_fem();
         for (k, (slot, layer)) in out.iter_mut().zip(&self.layers).enumerate() {
             if slot.name != layer.name {
                 slot.name.clone_from(&layer.name);
