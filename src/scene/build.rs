@@ -53,6 +53,7 @@ impl Scene {
                 max_time: interactive.then(|| s.relax_budget()),
                 tolerance: 0.0,
             },
+            sizes: self.instrument_sizes,
             ..WorldConfig::default()
         }
     }

@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::chainmail::Material;
 use crate::snapshot::{CameraSpec, InstrumentKind};
+pub use crate::instrument::InstrumentSizes;
 
 /// One training exercise: the tissue, the instruments offered, the cameras and the clock.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -46,6 +47,9 @@ pub struct Scene {
     /// The exercise's goals, for the live assessment and the report. Default: none.
     #[serde(default)]
     pub goals: Option<crate::training::Goals>,
+    /// The instruments' physical sizes (jaw, blade, probe), metres. Default: see [`InstrumentSizes`].
+    #[serde(default)]
+    pub instrument_sizes: InstrumentSizes,
 }
 
 fn all_instruments() -> Vec<InstrumentKind> {

@@ -31,6 +31,7 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Problem> {
     }
     cameras(&s.cameras, &root.f("cameras"))?;
     simulation(&s.simulation, &root.f("simulation"))?;
+    instrument_sizes(&s.instrument_sizes, &root.f("instrument_sizes"))?;
     if let Some(g) = &s.goals {
         goals(g, &root.f("goals"))?;
     }
@@ -609,6 +610,20 @@ fn simulation(s: &SimulationSettings, at: &FieldPath) -> Result<(), Problem> {
             &at.f("relax_budget_us"),
             format!("is {}, expected at most 1000000 microseconds per step", s.relax_budget_us),
         );
+    }
+    Ok(())
+}
+
+/// Instrument sizes: positive lengths up to 5 cm (a jaw or blade wider than the exercise is a typo).
+fn instrument_sizes(s: &crate::instrument::InstrumentSizes, at: &FieldPath) -> Result<(), Problem> {
+    for (name, x) in
+        [("jaw_width", s.jaw_width), ("blade_width", s.blade_width), ("probe_radius", s.probe_radius)]
+    {
+        let at = at.f(name);
+        positive(&at, x, "metres")?;
+        if x > 0.05 {
+            return problem(&at, format!("is {x}, expected at most 0.05 metres (5 cm)"));
+        }
     }
     Ok(())
 }

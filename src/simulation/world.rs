@@ -9,7 +9,7 @@ use web_time::Instant;
 
 use super::{Command, FixedClock};
 use crate::chainmail::{ElementId, RelaxBudget};
-use crate::instrument::{Command as InstrumentCommand, GRASP_REACH, Hit, Instrument, PROBE_RADIUS};
+use crate::instrument::{Command as InstrumentCommand, GRASP_REACH, Hit, Instrument, InstrumentSizes};
 use crate::snapshot::{InstrumentKind, InstrumentPose, Snapshot, SurfaceRegion};
 use crate::tissue::{CutSegment, Tissue, TissueError, TissueSpec};
 
@@ -28,11 +28,13 @@ pub struct WorldConfig {
     /// Most steps one [`World::due_steps`] hands out: real time beyond that is dropped (the simulation
     /// falls behind instead of freezing its caller). Default 100.
     pub max_steps_per_advance: u32,
+    /// The instruments' physical sizes, metres.
+    pub sizes: InstrumentSizes,
 }
 
 impl Default for WorldConfig {
     fn default() -> Self {
-        Self { rate_hz: 1000.0, relax: RelaxBudget::sweeps(4), max_steps_per_advance: 100 }
+        Self { rate_hz: 1000.0, relax: RelaxBudget::sweeps(4), max_steps_per_advance: 100, sizes: InstrumentSizes::default() }
     }
 }
 
@@ -101,7 +103,8 @@ fn ms(t: Instant) -> f32 {
 
 impl World {
     /// A world around a tissue.
-    pub fn new(tissue: Tissue, config: WorldConfig) -> Self {
+    pub fn new(mut tissue: Tissue, config: WorldConfig) -> Self {
+        tissue.set_blade_width(config.sizes.blade_width);
         Self {
             tissue,
             instrument: Instrument::default(),
@@ -150,6 +153,7 @@ impl World {
         {
             self.clock = config.clock();
         }
+        self.tissue.set_blade_width(config.sizes.blade_width);
         self.config = config;
     }
 
@@ -264,7 +268,7 @@ impl World {
             }
             (InstrumentKind::Probe, _) => {
                 let t = Instant::now();
-                c.moved_chain = self.tissue.push(inst.target, PROBE_RADIUS);
+                c.moved_chain = self.tissue.push(inst.target, self.config.sizes.probe_radius);
                 inst.tip = inst.target;
                 c.phase_us[1] = ms(t);
             }
@@ -303,6 +307,7 @@ impl World {
 
     fn release(&mut self) {
         if let Some(e) = self.instrument.grasped.take() {
+            self.tissue.release_grasp();
             self.tissue.set_held(e, false);
         }
     }
@@ -400,7 +405,11 @@ impl World {
 
     fn grasp(&mut self, e: ElementId) {
         self.instrument.grasped = Some(e);
-        self.tissue.set_held(e, true);
+        if self.tissue.is_fem() {
+            self.tissue.set_held(e, true);
+        } else {
+            self.tissue.grasp(e, self.config.sizes.jaw_width);
+        }
         if let Some(p) = self.tissue.world_position(e) {
             self.instrument.target = p;
             self.instrument.tip = p;

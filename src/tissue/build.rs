@@ -524,6 +524,8 @@ impl Tissue {
             body,
             model,
             notice: None,
+            jaws: Default::default(),
+            blade_half_width: 0.5 * crate::instrument::BLADE_WIDTH,
             on_surface,
         }
     }

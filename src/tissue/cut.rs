@@ -29,10 +29,6 @@ pub struct CutSegment {
     pub depth: CutDepth,
 }
 
-/// Fibres whose foot lies within this many element spacings of the blade are severed, so that a
-/// straight stroke in any direction leaves no fibre standing across it.
-const FIBRE_REACH: f32 = 0.75;
-
 #[inline]
 fn orient(a: [f32; 2], b: [f32; 2], c: [f32; 2]) -> f32 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
@@ -122,7 +118,9 @@ impl Tissue {
                     CutDepth::Between if nl == 2 => LinkKind::Connective,
                     CutDepth::Between => return 0,
                 };
-                let reach = FIBRE_REACH * self.spacing;
+                // Fibres whose middle lies within the blade's half-width of the stroke (metres, the
+                // same at every element spacing).
+                let reach = self.blade_half_width;
                 for l in 0..self.body.link_count() {
                     if self.link_kind[l] != want {
                         continue;

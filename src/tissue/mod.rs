@@ -15,6 +15,7 @@
 mod build;
 mod cut;
 mod fem_drive;
+mod grasp;
 mod mesh;
 mod spec;
 
@@ -161,6 +162,10 @@ pub struct Tissue {
     pub(crate) model: Model,
     /// Something the trainee should be told (a refused cut).
     pub(crate) notice: Option<String>,
+    /// What the forceps' jaws hold.
+    pub(crate) jaws: grasp::Jaws,
+    /// Connective fibres within this distance of a `Between` stroke are severed, metres.
+    pub(crate) blade_half_width: f32,
     /// Elements on the outer surface (vertices of a drawn triangle): what instruments can touch.
     pub(crate) on_surface: Vec<bool>,
     /// Lattice coordinates where surface fractions 0 lie, and what fraction 1 adds (see
@@ -319,6 +324,13 @@ impl Tissue {
         &self.model
     }
 
+    /// Sets the scalpel's blade width, metres: a `Between` stroke severs the fibres within half of it.
+    pub fn set_blade_width(&mut self, width: f32) {
+        if width.is_finite() && width > 0.0 {
+            self.blade_half_width = 0.5 * width;
+        }
+    }
+
     /// Whether a finite-element model drives this tissue.
     pub fn is_fem(&self) -> bool {
         matches!(self.model, Model::Fem(_))
@@ -396,6 +408,9 @@ impl Tissue {
     pub fn pull_pass(&mut self, e: ElementId, target: [f32; 3], pass: Pass) -> (u32, f32) {
         let Ok(p) = self.body.position(e) else { return (0, 0.0) };
         let t = self.geometry.to_lattice(target, p[0]);
+        if !self.is_fem() && self.jaws.held.len() > 1 && self.jaws.held.first().map(|h| h.0) == Some(e) {
+            return self.pull_jaws(t, pass);
+        }
         self.displace(e, t, pass)
     }
 

@@ -1,0 +1,127 @@
+//! The forceps' jaws: a grasp holds every element of the grasped layer within half the jaw width of
+//! the grasp point (metres across the surface), not one element, so the load spreads over the same
+//! area of tissue at every element spacing. The held patch moves as one: each element keeps its offset
+//! from the grasp point.
+
+use super::{Geometry, LinkKind, Tissue};
+use crate::chainmail::{ElementId, Pass};
+
+/// The elements the jaws hold, centre first, then outwards in the order a walk over the layer's
+/// links reaches them, each with its lattice offset from the centre at the moment of the grasp.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Jaws {
+    pub(crate) held: Vec<(ElementId, [f32; 3])>,
+    /// Walk queue and visit marks, kept so that a grasp does not allocate once warmed up.
+    queue: Vec<u32>,
+    seen: Vec<bool>,
+}
+
+impl Tissue {
+    /// Closes the jaws on element `e`: it and every element of its layer, reached over intact links of
+    /// that layer, whose position lies within `jaw_width / 2` of `e`'s (across the surface: `u, v` on
+    /// layers, all three coordinates in a volume) are held. Pinned elements stay pinned and are left
+    /// out. Returns how many elements are held.
+    pub fn grasp(&mut self, e: ElementId, jaw_width: f32) -> usize {
+        self.release_grasp();
+        let Ok(c) = self.body.position(e) else { return 0 };
+        let reach2 = (0.5 * jaw_width).max(0.0).powi(2);
+        let plane = matches!(self.geometry, Geometry::Surface(_));
+        let layer = self.layer_of(e);
+        let mut jaws = std::mem::take(&mut self.jaws);
+        jaws.held.clear();
+        jaws.queue.clear();
+        jaws.seen.resize(self.body.element_count(), false);
+        jaws.queue.push(e.0);
+        jaws.seen[e.index()] = true;
+        let mut k = 0;
+        while k < jaws.queue.len() {
+            let i = ElementId(jaws.queue[k]);
+            k += 1;
+            let Ok(p) = self.body.position(i) else { continue };
+            let d = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
+            if !self.body.is_pinned(i) {
+                jaws.held.push((i, d));
+            }
+            for (n, l) in self.body.lattice().neighbours(i) {
+                if jaws.seen[n.index()] || !self.body.link_intact(l) {
+                    continue;
+                }
+                let same_layer = match (layer, self.link_kind.get(l.index())) {
+                    (Some(x), Some(LinkKind::Layer(y))) => x == usize::from(*y),
+                    (None, _) => true,
+                    _ => false,
+                };
+                let Ok(q) = self.body.position(n) else { continue };
+                let dq = [q[0] - c[0], q[1] - c[1], q[2] - c[2]];
+                let r2 = dq[0] * dq[0] + dq[1] * dq[1] + if plane { 0.0 } else { dq[2] * dq[2] };
+                if same_layer && r2 <= reach2 {
+                    jaws.seen[n.index()] = true;
+                    jaws.queue.push(n.0);
+                }
+            }
+        }
+        for &i in &jaws.queue {
+            jaws.seen[i as usize] = false;
+        }
+        if jaws.held.first().map(|h| h.0) != Some(e) {
+            // A pinned centre holds nothing but itself (it cannot move anyway).
+            jaws.held.insert(0, (e, [0.0; 3]));
+        }
+        for &(i, _) in &jaws.held {
+            self.set_held(i, true);
+        }
+        let n = jaws.held.len();
+        self.jaws = jaws;
+        n
+    }
+
+    /// Opens the jaws: every held element is let go.
+    pub fn release_grasp(&mut self) {
+        let held = std::mem::take(&mut self.jaws.held);
+        for &(i, _) in &held {
+            self.set_held(i, false);
+        }
+        self.jaws.held = held;
+        self.jaws.held.clear();
+    }
+
+    /// The elements the jaws hold (the grasp point first).
+    pub fn held(&self) -> impl ExactSizeIterator<Item = ElementId> + '_ {
+        self.jaws.held.iter().map(|h| h.0)
+    }
+
+    /// One pass of a jaw pull: the centre goes toward `t` (lattice coordinates) as far as the tissue
+    /// allows, then every other held element toward the centre's new position plus its offset. The
+    /// held elements are let go of during the pass so that they do not block each other's chain
+    /// reactions. Returns the elements moved and the smallest share of a requested move allowed.
+    pub(crate) fn pull_jaws(&mut self, t: [f32; 3], pass: Pass) -> (u32, f32) {
+        let held = std::mem::take(&mut self.jaws.held);
+        for &(i, _) in &held {
+            let _ = self.body.set_held(i, false);
+        }
+        let (mut moved, mut fraction) = (0u32, 1.0f32);
+        if let Some(&(centre, _)) = held.first() {
+            if let Ok(d) = self.body.deform(&mut self.ws, centre, t, pass) {
+                moved += d.moved;
+                fraction = d.fraction;
+                self.activate_moved();
+            }
+            let c = self.body.position(centre).unwrap_or(t);
+            for &(i, off) in &held[1..] {
+                let goal = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
+                if let Ok(d) = self.body.deform(&mut self.ws, i, goal, pass) {
+                    moved += d.moved;
+                    if d.attempts > 0 {
+                        fraction = fraction.min(d.fraction);
+                    }
+                    self.activate_moved();
+                }
+            }
+        }
+        for &(i, _) in &held {
+            let _ = self.body.set_held(i, true);
+        }
+        self.jaws.held = held;
+        (moved, fraction)
+    }
+}
