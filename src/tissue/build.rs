@@ -514,6 +514,8 @@ impl Tissue {
             min_gap,
             active: Vec::with_capacity(n),
             in_active: vec![false; n],
+            last_move: vec![0.0; n],
+            region_scratch: Vec::with_capacity(n),
             settled: false,
             cut_queue: Vec::new(),
             events: Vec::new(),

@@ -17,6 +17,7 @@ mod cut;
 mod fem_drive;
 mod grasp;
 mod mesh;
+mod settle;
 mod spec;
 
 pub use build::{LayeredSpec, TissueError, TissueSpec, VolumeSpec};
@@ -148,6 +149,10 @@ pub struct Tissue {
     /// Elements disturbed since relaxation last converged.
     pub(crate) active: Vec<ElementId>,
     pub(crate) in_active: Vec<bool>,
+    /// Each element's move in its last relaxation sweep (infinite when put into the region since;
+    /// 0 outside the region), for pruning the region.
+    pub(crate) last_move: Vec<f32>,
+    pub(crate) region_scratch: Vec<ElementId>,
     /// The last relaxation converged and nothing has moved since: [`Tissue::end_step`] may forget the
     /// disturbed region.
     pub(crate) settled: bool,
@@ -371,6 +376,9 @@ impl Tissue {
 
     pub(crate) fn activate(&mut self, e: u32) {
         let i = e as usize;
+        if let Some(m) = self.last_move.get_mut(i) {
+            *m = f32::INFINITY;
+        }
         if i < self.in_active.len() && !self.in_active[i] {
             self.in_active[i] = true;
             self.active.push(ElementId(e));
@@ -451,18 +459,21 @@ impl Tissue {
             self.settled = true;
             return crate::chainmail::RelaxReport { converged: true, ..Default::default() };
         }
-        let report = self.body.relax_elements(&mut self.ws, budget, &self.active);
+        let report = self.relax_region(budget);
         self.settled = report.converged;
         report
     }
 
     /// Closes a step: forgets the disturbed region if the step's relaxation converged and contact
-    /// moved nothing afterwards.
+    /// moved nothing afterwards; otherwise shrinks it to what still moves (see `settle.rs`).
     pub fn end_step(&mut self) {
         if self.settled {
             for e in self.active.drain(..) {
                 self.in_active[e.index()] = false;
+                self.last_move[e.index()] = 0.0;
             }
+        } else if self.fem.is_none() {
+            self.prune_region();
         }
         self.settled = false;
     }
@@ -474,7 +485,8 @@ impl Tissue {
 
     /// Keeps the layers apart: wherever an element of the upper layer has come closer than the minimum
     /// gap to its partner below (along the normal), the free one of the two moves away (both halfway
-    /// when both are free). Returns how many pairs were corrected.
+    /// when both are free), each by a chain reaction along the normal (pins may cut it short), so
+    /// that the layers' limits hold. Returns how many pairs were corrected.
     pub fn enforce_contact(&mut self) -> u32 {
         if self.layers.len() != 2 || !matches!(self.geometry, Geometry::Surface(_)) {
             return 0;
@@ -501,8 +513,18 @@ impl Tissue {
                 (false, true) => (0.0, short),
                 (false, false) => continue,
             };
-            let _ = self.body.set_position(lower, [pl[0], pl[1], pl[2] + dl]);
-            let _ = self.body.set_position(upper, [pu[0], pu[1], pu[2] + du]);
+            // Each element is pushed by a chain reaction along the normal, so its neighbours follow
+            // and no link leaves its limits (moving the pair alone stretched the links beside it by
+            // up to the gap, which on a fine mesh is several spacings and tore them).
+            for (e, d) in [(lower, dl), (upper, du)] {
+                if d == 0.0 {
+                    continue;
+                }
+                let Ok(p) = self.body.position(e) else { continue };
+                if self.body.deform(&mut self.ws, e, [p[0], p[1], p[2] + d], Pass::Normal).is_ok() {
+                    self.activate_moved();
+                }
+            }
             self.activate(lower.0);
             self.activate(upper.0);
             fixed += 1;

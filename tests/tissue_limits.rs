@@ -1,0 +1,99 @@
+//! Limits hold: on the default meninges exercise (coarsened to keep the test quick), random sessions of
+//! grasps, lifts, pushes and cuts never leave an intact link outside its material's limits after a
+//! step. Links that go past their tear ratio break (and are counted as torn); every other link stays in
+//! its constraint box, up to rounding.
+
+use dissect::chainmail::LinkId;
+use dissect::instrument::Command;
+use dissect::scene::{Scene, Tissue as SceneTissue};
+use dissect::simulation::{InstrumentKind, World};
+use dissect::tissue::CutDepth;
+use proptest::prelude::*;
+
+/// Tolerance on a link's distance outside its box, as a share of the element spacing (rounding).
+const SLACK: f32 = 1e-4;
+
+fn world(nu: u32, nv: u32) -> World {
+    let mut scene = Scene::default_scene().expect("default scene");
+    if let SceneTissue::Layers(l) = &mut scene.tissue {
+        l.resolution = [nu, nv];
+    }
+    scene.build_world(false).expect("world")
+}
+
+#[derive(Clone, Debug)]
+enum Act {
+    To(f32, f32, f32),
+    Do(Command),
+}
+
+fn act() -> impl Strategy<Value = Act> {
+    prop_oneof![
+        5 => (0.0f32..1.0, 0.0f32..1.0, 0.0f32..0.015).prop_map(|(u, v, h)| Act::To(u, v, h)),
+        1 => prop_oneof![
+            Just(InstrumentKind::Forceps),
+            Just(InstrumentKind::Probe),
+            Just(InstrumentKind::Scalpel)
+        ]
+        .prop_map(|k| Act::Do(Command::Select(k))),
+        2 => Just(Act::Do(Command::Grasp)),
+        1 => Just(Act::Do(Command::Release)),
+        1 => Just(Act::Do(Command::BeginCut)),
+        1 => Just(Act::Do(Command::EndCut)),
+        1 => prop_oneof![Just(CutDepth::Upper), Just(CutDepth::Between), Just(CutDepth::Lower)]
+            .prop_map(|d| Act::Do(Command::SetDepth(d))),
+    ]
+}
+
+fn worst_violation(world: &World) -> (f32, u32) {
+    let body = world.tissue().body();
+    let mut worst = (0.0f32, 0);
+    for l in 0..body.link_count() as u32 {
+        let id = LinkId(l);
+        if !body.link_intact(id) {
+            continue;
+        }
+        let v = body.link_violation(id).unwrap_or(0.0);
+        if v > worst.0 {
+            worst = (v, l);
+        }
+    }
+    worst
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+    #[test]
+    #[ignore = "fails today: a probe pushing the dura deep moves the arachnoid through several fibres at once, and Gibson's chain reaction (each element within its sponsor's box only) leaves arachnoid links up to about 0.17 spacings outside their limits, which relaxation cannot always repair (issue 14, point 3)"]
+    fn no_intact_link_leaves_its_limits(acts in proptest::collection::vec((act(), 1u8..30), 1..30)) {
+        let mut world = world(40, 30);
+        let spacing = world.tissue().spacing();
+        // Moves go there in small steps, as a hand does.
+        let mut at = world.tissue().surface_point(0.5, 0.5, 0.003);
+        for (a, steps) in &acts {
+            match a {
+                Act::Do(c) => world.push(c.clone()),
+                Act::To(..) => {}
+            }
+            let goal = match *a {
+                Act::To(u, v, h) => world.tissue().surface_point(u, v, h),
+                Act::Do(_) => at,
+            };
+            let from = at;
+            for s in 1..=u32::from(*steps) {
+                let f = s as f32 / f32::from(*steps);
+                at = [0, 1, 2].map(|k| from[k] + f * (goal[k] - from[k]));
+                world.push(Command::MoveTo(at));
+                world.step();
+                let (v, l) = worst_violation(&world);
+                prop_assert!(
+                    v <= SLACK * spacing,
+                    "step {}: link {} ({:?}) is {} m outside its limits ({} spacings): offset {:?}, box {:?}, counters {:?}",
+                    world.step_count(), l, world.tissue().link_kind(LinkId(l)), v, v / spacing,
+                    world.tissue().body().link_offset(LinkId(l)), world.tissue().body().link_limits(LinkId(l)),
+                    world.last_step()
+                );
+            }
+        }
+    }
+}
