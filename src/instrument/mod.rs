@@ -8,6 +8,8 @@ mod pick;
 
 pub use pick::{Hit, Picker};
 
+use serde::{Deserialize, Serialize};
+
 use crate::chainmail::ElementId;
 use crate::snapshot::{InstrumentKind, InstrumentPose};
 use crate::tissue::CutDepth;

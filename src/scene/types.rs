@@ -20,8 +20,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::chainmail::Material;
-use crate::snapshot::{CameraSpec, InstrumentKind};
 pub use crate::instrument::InstrumentSizes;
+use crate::snapshot::{CameraSpec, InstrumentKind};
 
 /// One training exercise: the tissue, the instruments offered, the cameras and the clock.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]

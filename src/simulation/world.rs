@@ -34,7 +34,12 @@ pub struct WorldConfig {
 
 impl Default for WorldConfig {
     fn default() -> Self {
-        Self { rate_hz: 1000.0, relax: RelaxBudget::sweeps(4), max_steps_per_advance: 100, sizes: InstrumentSizes::default() }
+        Self {
+            rate_hz: 1000.0,
+            relax: RelaxBudget::sweeps(4),
+            max_steps_per_advance: 100,
+            sizes: InstrumentSizes::default(),
+        }
     }
 }
 

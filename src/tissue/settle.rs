@@ -28,7 +28,7 @@ impl Tissue {
                 let i = e.index();
                 let p = self.body.pos[i];
                 let q = self.body.relaxed_unless_fixed(i);
-                let q = self.into_boxes(i, q);
+                let q = self.clamped_to_boxes(i, q);
                 let m = (q[0] - p[0]).abs().max((q[1] - p[1]).abs()).max((q[2] - p[2]).abs());
                 self.last_move[i] = m;
                 change = change.max(m);
@@ -59,7 +59,7 @@ impl Tissue {
     /// within a box of a neighbour moved along another path (a layer pushed through the fibres at
     /// several places at once); this repairs such links as the sweeps go.
     #[inline]
-    fn into_boxes(&self, i: usize, q: [f32; 3]) -> [f32; 3] {
+    fn clamped_to_boxes(&self, i: usize, q: [f32; 3]) -> [f32; 3] {
         let b = &self.body;
         let e = crate::chainmail::ElementId(i as u32);
         if b.is_pinned(e) || b.is_held(e) {
