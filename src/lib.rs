@@ -22,6 +22,7 @@
 //! | [`tissue`] | layers, connective fibres, pins, grasp and push, contact, cuts, tears, meshes; its deformation model (ChainMail or FEM) | chainmail, surface, fem, snapshot |
 //! | [`instrument`] | probe, forceps, scalpel: state, instrument commands, pose, picking with parry3d | chainmail, tissue, snapshot |
 //! | [`simulation`] | the world: its clock and step length, its commands, the ordered phases of a step, the snapshot it fills | chainmail, tissue, instrument, snapshot, web-time |
+//! | [`haptics`] | haptic devices (mouse, simulated, Haply Inverse3 behind the `haply` feature), the virtual coupling and its passivity controller | instrument, snapshot, web-time; `haply` and `tokio` with the feature |
 //! | [`training`] | exercise goals, live assessment and score, session report and plot | tissue, simulation |
 //! | [`scene`] | RON scenes, scripts and recordings: schema, loading, validation, errors at `path:line:column`; builds a world | chainmail, surface, tissue, instrument, simulation, training (goals), serde, ron |
 //! | [`runner`] | the [`runner::Episode`] every driver steps (world, assessor, recorder, command source), the script player, run metrics and final state | scene, simulation, training and below |
@@ -31,12 +32,13 @@
 //! | [`app`] | the two windows, the event loop, input to instrument commands, the session (an episode, recording and replay, hot reload) | winit (only here), egui-winit, egui-wgpu, ui, render, and the simulation side's public API (`World`, `Episode`) |
 //!
 //! The simulation side (`snapshot`, `chainmail`, `surface`, `tissue`, `instrument`, `simulation`,
-//! `scene`, `training`, `runner`, `fem`) never imports wgpu, winit or egui.
+//! `scene`, `training`, `runner`, `fem`, `haptics`) never imports wgpu, winit or egui.
 
 #[cfg(not(target_arch = "wasm32"))]
 pub mod app;
 pub mod chainmail;
 pub mod fem;
+pub mod haptics;
 pub mod instrument;
 pub mod render;
 pub mod runner;

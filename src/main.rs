@@ -46,6 +46,10 @@ struct WindowArgs {
     /// Where screenshots (F12 / P) go (default: screenshots/).
     #[arg(long, value_name = "DIR")]
     screenshot_dir: Option<PathBuf>,
+    /// The haptic device: `mouse` (default) or `inverse3` (a Haply Inverse3, built with the `haply`
+    /// feature). With no device found the trainer says so and uses the mouse.
+    #[arg(long, value_name = "DEVICE", default_value = "mouse")]
+    haptic: String,
 }
 
 #[derive(Subcommand, Debug)]
@@ -188,6 +192,7 @@ fn open_app(
         record: window.record,
         screenshot_dir: window.screenshot_dir,
         source,
+        haptic: window.haptic,
     };
     match dissect::app::run(options) {
         Ok(()) => Ok(ExitCode::SUCCESS),

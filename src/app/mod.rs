@@ -79,6 +79,8 @@ pub struct AppOptions {
     pub screenshot_dir: Option<PathBuf>,
     /// Live, replay or demo.
     pub source: Source,
+    /// The haptic device (`mouse`, `inverse3`).
+    pub haptic: String,
 }
 
 /// Opens the windows and runs until the trainee's window is closed (or `frames` have been drawn).
@@ -91,6 +93,15 @@ pub fn run(options: AppOptions) -> Result<(), AppError> {
         Source::Replay(path) => Session::replay(path)?,
         Source::Demo(script) => Session::demo(options.scene.as_deref(), script)?,
     };
+    let mut session = session;
+    if session.input_enabled() {
+        let (device, message) = crate::haptics::open(&options.haptic);
+        if let Some(m) = message {
+            println!("dissect: {m}");
+            session.say(m);
+        }
+        session.set_haptic(crate::haptics::HapticLink::new(device));
+    }
     let event_loop = EventLoop::new().map_err(|e| AppError::Window(e.to_string()))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App { options, session, state: None, error: None, finished: false };

@@ -277,6 +277,11 @@ impl Session {
         self.episode.assessor()
     }
 
+    /// Drives the instrument from a haptic device from the next step on.
+    pub fn set_haptic(&mut self, link: crate::haptics::HapticLink) {
+        self.episode.set_haptic(link);
+    }
+
     /// Whether user input reaches the world.
     pub fn input_enabled(&self) -> bool {
         matches!(self.driver, Driver::Live { .. })
@@ -310,6 +315,10 @@ impl Session {
         let a = self.episode.advance(frame, Some(SIM_BUDGET_PER_FRAME));
         if let Some((path, e)) = self.episode.take_record_error() {
             eprintln!("dissect: recording stopped: {path}: {e}");
+        }
+        if let Some(m) = self.episode.take_haptic_error() {
+            eprintln!("dissect: {m}");
+            self.say(m);
         }
         if let Some(notice) = self.episode.world_mut().tissue_mut().take_notice() {
             self.say(notice);
@@ -451,7 +460,12 @@ impl Session {
         let json = base.with_extension("report.json");
         let png = base.with_extension("report.png");
         let result = crate::training::write_report(&json, &assessment, assessor.history()).and_then(|()| {
-            crate::training::write_plot(&png, assessor.history(), assessor.goals().stretch_limit)
+            crate::training::write_plot(
+                &png,
+                assessor.history(),
+                assessor.goals().stretch_limit,
+                assessor.goals().force_limit,
+            )
         });
         match result {
             Ok(()) => {

@@ -50,15 +50,57 @@ pub struct Material {
     /// A link whose length exceeds `tear_ratio` times its rest length breaks (tears). `None`: never.
     #[serde(default)]
     pub tear_ratio: Option<f32>,
+    /// Young's modulus E of the tissue, pascals: with [`Material::thickness`], what the tissue's force on
+    /// an instrument is computed from (the chain reaction and relaxation do not use it). Default
+    /// [`DEFAULT_YOUNG_MODULUS`] (1 MPa).
+    #[serde(default = "default_young")]
+    pub young_modulus: f32,
+    /// Thickness of a layer, metres: a membrane's link of rest length `L` and width `w` is a spring of
+    /// `E·t·w/L` newtons per metre (on a square grid `E·t`, whatever the element spacing). Not used by
+    /// connective fibres (their cross-section is their elements' area) or volumes. Default
+    /// [`DEFAULT_THICKNESS`] (1 mm).
+    #[serde(default = "default_thickness")]
+    pub thickness: f32,
+    /// Energy needed to cut through a unit area of the tissue, joules per square metre: the scalpel's
+    /// resistance. Default [`DEFAULT_TOUGHNESS`].
+    #[serde(default = "default_toughness")]
+    pub toughness: f32,
 }
+
+/// Default Young's modulus, pascals: a soft membrane (skin and meninges lie between about 0.1 and
+/// 60 MPa in tensile tests).
+pub const DEFAULT_YOUNG_MODULUS: f32 = 1.0e6;
+/// Default layer thickness, metres.
+pub const DEFAULT_THICKNESS: f32 = 1.0e-3;
+/// Default cutting toughness, joules per square metre (soft tissues: about 0.1 to 5 kJ/m²).
+pub const DEFAULT_TOUGHNESS: f32 = 1000.0;
 
 fn one() -> f32 {
     1.0
 }
 
+fn default_young() -> f32 {
+    DEFAULT_YOUNG_MODULUS
+}
+
+fn default_thickness() -> f32 {
+    DEFAULT_THICKNESS
+}
+
+fn default_toughness() -> f32 {
+    DEFAULT_TOUGHNESS
+}
+
 impl Default for Material {
     fn default() -> Self {
-        Self { limits: Limits::default(), stiffness: 1.0, tear_ratio: None }
+        Self {
+            limits: Limits::default(),
+            stiffness: 1.0,
+            tear_ratio: None,
+            young_modulus: DEFAULT_YOUNG_MODULUS,
+            thickness: DEFAULT_THICKNESS,
+            toughness: DEFAULT_TOUGHNESS,
+        }
     }
 }
 
@@ -122,6 +164,18 @@ impl Material {
                 "stiffness is {}, expected a positive number",
                 self.stiffness
             )));
+        }
+        for (name, x, unit) in [
+            ("young_modulus", self.young_modulus, "pascals"),
+            ("thickness", self.thickness, "metres"),
+            ("toughness", self.toughness, "joules per square metre"),
+        ] {
+            finite(name, x)?;
+            if x <= 0.0 {
+                return Err(ChainMailError::BadMaterial(format!(
+                    "{name} is {x}, expected a positive number of {unit}"
+                )));
+            }
         }
         if let Some(t) = self.tear_ratio {
             finite("tear_ratio", t)?;

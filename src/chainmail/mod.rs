@@ -62,7 +62,7 @@ pub use error::ChainMailError;
 pub use ids::{ElementId, LinkId, MaterialId};
 pub(crate) use lattice::SIDE_B as SIDE_B_BIT;
 pub use lattice::{Axis, BYTES_PER_ELEMENT, GridSpec, Lattice, LinkSpec, MAX_ELEMENTS};
-pub use material::{Limits, Material};
+pub use material::{DEFAULT_THICKNESS, DEFAULT_TOUGHNESS, DEFAULT_YOUNG_MODULUS, Limits, Material};
 pub use reaction::{Deformation, Pass};
 pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};
 pub use simd::{SIMD_ENV, SimdLevel};

@@ -105,6 +105,14 @@ pub struct CompareRow {
     pub converged: bool,
     /// Force the FEM needs at the node for this displacement, newtons.
     pub fem_force: [f64; 3],
+    /// Force ChainMail's springs need at the node (minus their pull on it) after relaxation to
+    /// convergence, newtons: each link a bar of the FEM's Young's modulus and its tributary
+    /// cross-section, as the tissue computes it (`tissue/force.rs`).
+    pub chainmail_force: [f64; 3],
+    /// The same after one timed step (`step_sweeps` sweeps), newtons.
+    pub chainmail_force_step: [f64; 3],
+    /// `|chainmail_force − fem_force| / |fem_force|`.
+    pub force_error: f64,
     /// Mean time of one ChainMail step (deformation + `step_sweeps` sweeps), microseconds.
     pub chainmail_step_us: f64,
     /// Time of the ChainMail deformation plus relaxation to convergence, milliseconds.
@@ -156,14 +164,14 @@ impl fmt::Display for CompareReport {
         writeln!(f, "errors: RMS over free surface nodes of |u_cm − u_fem| / |imposed|")?;
         writeln!(
             f,
-            "| imposed | achieved | rms unrelaxed | rms {} sweeps | rms relaxed | max relaxed | sweeps | CM step µs | CM converge ms | FEM step µs |",
-            c.step_sweeps
+            "| imposed | achieved | rms unrelaxed | rms {} sweeps | rms relaxed | max relaxed | sweeps | CM step µs | CM converge ms | FEM step µs | FEM force N | CM force N ({} sweeps) | CM force N (relaxed) | force error |",
+            c.step_sweeps, c.step_sweeps
         )?;
-        writeln!(f, "|---|---|---|---|---|---|---|---|---|---|")?;
+        writeln!(f, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
         for r in &self.rows {
             writeln!(
                 f,
-                "| {:.0} % ({:.2} mm) | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {}{} | {:.1} | {:.1} | {:.1} |",
+                "| {:.0} % ({:.2} mm) | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {}{} | {:.1} | {:.1} | {:.1} | {:.4} | {:.4} | {:.4} | {:.0} % |",
                 100.0 * r.fraction_of_height,
                 1000.0 * r.imposed,
                 r.chainmail_achieved,
@@ -175,11 +183,19 @@ impl fmt::Display for CompareReport {
                 if r.converged { "" } else { " (not converged)" },
                 r.chainmail_step_us,
                 r.chainmail_converge_ms,
-                r.fem_step_us
+                r.fem_step_us,
+                norm(r.fem_force),
+                norm(r.chainmail_force_step),
+                norm(r.chainmail_force),
+                100.0 * r.force_error
             )?;
         }
         Ok(())
     }
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 fn chainmail(e: crate::chainmail::ChainMailError) -> FemError {
@@ -204,6 +220,45 @@ fn errors(model: &FemModel, body: &Body, u_fem: &[f64], scale: f64) -> (f64, f64
         max = max.max(e2.sqrt());
     }
     ((sum / nodes.len().max(1) as f64).sqrt() / scale, max / scale)
+}
+
+/// The force needed at element `e` of a ChainMail volume to hold it where it is against its links,
+/// newtons: each link a bar of modulus `young` and the tributary cross-section around it (the square of
+/// a quarter of the perpendicular links' lengths at both ends, summed: `a²` inside a cubic lattice),
+/// the rule `tissue/force.rs` applies to volumes.
+fn spring_force(body: &Body, e: ElementId, young: f64) -> [f64; 3] {
+    let lattice = body.lattice();
+    let (pos, rest) = (body.positions(), lattice.rest_positions());
+    let sub = |a: [f32; 3], b: [f32; 3]| [0, 1, 2].map(|k| f64::from(a[k]) - f64::from(b[k]));
+    let len = |d: [f64; 3]| d.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let mut f = [0.0; 3];
+    for (n, l) in lattice.neighbours(e) {
+        if !body.link_intact(l) {
+            continue;
+        }
+        let r = sub(rest[n.index()], rest[e.index()]);
+        let rl = len(r);
+        let mut perp = 0.0;
+        for end in [e, n] {
+            for (m, other) in lattice.neighbours(end) {
+                let s = sub(rest[m.index()], rest[end.index()]);
+                let cos = (s[0] * r[0] + s[1] * r[1] + s[2] * r[2]) / (len(s) * rl).max(f64::MIN_POSITIVE);
+                if other != l && cos.abs() < 0.5 {
+                    perp += len(s);
+                }
+            }
+        }
+        let side = perp / 8.0;
+        let k = young * side * side / rl.max(f64::MIN_POSITIVE);
+        let d = sub(pos[n.index()], pos[e.index()]);
+        let dl = len(d).max(f64::MIN_POSITIVE);
+        let s = k * (dl - rl) / dl;
+        // The links pull the element by s·d; holding it there takes the opposite.
+        for x in 0..3 {
+            f[x] -= s * d[x];
+        }
+    }
+    f
 }
 
 /// Runs the comparison (see the module docs for what is measured and the parameters chosen).
@@ -275,6 +330,7 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
             step_time += t.elapsed().as_secs_f64();
         }
         let (rms_step, _) = errors(&model, &body, &u, imposed);
+        let chainmail_force_step = spring_force(&body, source, cfg.material.young);
 
         // ChainMail: the chain reaction alone, then relaxation to convergence.
         body.reset_to_rest();
@@ -291,6 +347,10 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
         let report = body.relax(&mut ws, budget, RelaxRegion::All);
         let converge = t_unrelaxed + t.elapsed();
         let (rms_relaxed, max_relaxed) = errors(&model, &body, &u, imposed);
+        let chainmail_force = spring_force(&body, source, cfg.material.young);
+        let fem_force = forces.first().copied().unwrap_or([0.0; 3]);
+        let diff = (0..3).map(|k| (chainmail_force[k] - fem_force[k]).powi(2)).sum::<f64>().sqrt();
+        let scale = fem_force.iter().map(|x| x * x).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
         rows.push(CompareRow {
             fraction_of_height: fraction,
             imposed,
@@ -301,7 +361,10 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
             max_relaxed,
             sweeps: report.sweeps,
             converged: report.converged,
-            fem_force: forces.first().copied().unwrap_or([0.0; 3]),
+            fem_force,
+            chainmail_force,
+            chainmail_force_step,
+            force_error: diff / scale,
             chainmail_step_us: step_time * 1e6 / cfg.timing_repeats as f64,
             chainmail_converge_ms: converge.as_secs_f64() * 1e3,
             fem_step_us,

@@ -49,6 +49,9 @@ pub struct Episode {
     pending: Vec<Command>,
     /// After a script has ended, keep stepping without input (a run of a given number of steps).
     run_past_end: bool,
+    /// A haptic device driving the instrument of a live episode (with the mouse: none).
+    haptic: Option<crate::haptics::HapticLink>,
+    haptic_error: Option<String>,
 }
 
 impl Episode {
@@ -63,7 +66,19 @@ impl Episode {
             source,
             pending: Vec::with_capacity(64),
             run_past_end: false,
+            haptic: None,
+            haptic_error: None,
         }
+    }
+
+    /// Lets a haptic device drive the instrument of a live episode, read and written every step.
+    pub fn set_haptic(&mut self, link: crate::haptics::HapticLink) {
+        self.haptic = Some(link);
+    }
+
+    /// Why the haptic device was dropped (it went away or reported nonsense), taken.
+    pub fn take_haptic_error(&mut self) -> Option<String> {
+        self.haptic_error.take()
     }
 
     /// Records every command given to the world from now on.
@@ -161,6 +176,16 @@ impl Episode {
             Source::Live => {
                 for c in self.pending.drain(..) {
                     self.world.push(c);
+                }
+                // The device's commands for this step go the same way (and are recorded below).
+                if let Some(h) = &mut self.haptic {
+                    match h.exchange(&self.world) {
+                        Ok(commands) => commands.into_iter().for_each(|c| self.world.push(c)),
+                        Err(e) => {
+                            self.haptic_error = Some(format!("haptic device dropped: {e}; the mouse drives"));
+                            self.haptic = None;
+                        }
+                    }
                 }
             }
             Source::Script(player) => {

@@ -74,7 +74,7 @@ pub struct Metrics {
 #[derive(Clone, Debug, Default)]
 pub struct MetricsRecorder {
     times: StepTimes,
-    phases: [f64; 6],
+    phases: [f64; 7],
     max_stretch: f32,
 }
 
@@ -83,7 +83,7 @@ impl MetricsRecorder {
     /// `steps` says: the argument is kept for callers that size it.
     pub fn with_capacity(steps: usize) -> Self {
         let _ = steps;
-        Self { times: StepTimes::new(), phases: [0.0; 6], max_stretch: 1.0 }
+        Self { times: StepTimes::new(), phases: [0.0; 7], max_stretch: 1.0 }
     }
 
     /// Call after each step.
@@ -279,7 +279,7 @@ pub fn write_outputs(dir: &std::path::Path, out: &RunOutput) -> Result<(), RunEr
         let path = dir.join("report.json");
         crate::training::write_report(&path, &assessment, a.history()).map_err(|e| werr(&path, &e))?;
         let path = dir.join("report.png");
-        crate::training::write_plot(&path, a.history(), a.goals().stretch_limit)
+        crate::training::write_plot(&path, a.history(), a.goals().stretch_limit, a.goals().force_limit)
             .map_err(|e| werr(&path, &e))?;
     }
     Ok(())

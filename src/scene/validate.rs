@@ -56,6 +56,12 @@ fn goals(g: &crate::training::Goals, at: &FieldPath) -> Result<(), Problem> {
             format!("is {}, expected a positive number of metres", g.separation),
         );
     }
+    if !(g.force_limit.is_finite() && g.force_limit > 0.0) {
+        return problem(
+            &at.f("force_limit"),
+            format!("is {}, expected a positive number of newtons", g.force_limit),
+        );
+    }
     if let Some(t) = g.time_limit_s
         && !(t.is_finite() && t > 0.0)
     {
@@ -175,6 +181,16 @@ pub(crate) fn material(at: &FieldPath, m: &Material) -> Result<(), Problem> {
             &a,
             format!("is {}, expected a positive number (1 is the usual weight)", m.stiffness),
         );
+    }
+    for (name, x, what) in [
+        ("young_modulus", m.young_modulus, "pascals (dura: about 1e6 to 6e7)"),
+        ("thickness", m.thickness, "metres (dura: about 0.0005)"),
+        ("toughness", m.toughness, "joules per square metre (soft tissue: about 100 to 5000)"),
+    ] {
+        let a = at.f(name);
+        if finite(&a, x)? <= 0.0 {
+            return problem(&a, format!("is {x}, expected a positive number of {what}"));
+        }
     }
     if let Some(t) = m.tear_ratio {
         let a = at.f("tear_ratio");

@@ -7,6 +7,7 @@ use glam::Vec3;
 use serde::Serialize;
 use web_time::Instant;
 
+use super::force::{ForceGauge, Forces};
 use super::{Command, FixedClock};
 use crate::chainmail::{ElementId, RelaxBudget};
 use crate::instrument::{Command as InstrumentCommand, GRASP_REACH, Hit, Instrument, InstrumentSizes};
@@ -14,8 +15,8 @@ use crate::snapshot::{InstrumentKind, InstrumentPose, Snapshot, SurfaceRegion};
 use crate::tissue::{CutSegment, Tissue, TissueError, TissueSpec};
 
 /// The phases of a step, in the order they run.
-pub const PHASES: [&str; 6] =
-    ["input", "chain reaction", "normal pass", "relaxation", "contact", "cuts and tears"];
+pub const PHASES: [&str; 7] =
+    ["input", "chain reaction", "normal pass", "relaxation", "contact", "cuts and tears", "forces"];
 
 /// Settings of the step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,7 +62,7 @@ pub struct StepCounters {
     /// The step's number (1 for the first step).
     pub step: u64,
     /// Wall time of each phase, microseconds, in the order of [`PHASES`].
-    pub phase_us: [f32; 6],
+    pub phase_us: [f32; 7],
     /// Elements moved by the in-plane (or volume) chain reaction, probe pushes included.
     pub moved_chain: u32,
     /// Elements moved by the normal pass.
@@ -100,6 +101,8 @@ pub struct World {
     /// Axis and roll of the forceps when another instrument was taken up while they held the tissue
     /// (they are drawn clamped where they were left).
     clamp_axis: ([f32; 3], f32),
+    gauge: ForceGauge,
+    forces: Forces,
 }
 
 fn ms(t: Instant) -> f32 {
@@ -121,6 +124,8 @@ impl World {
             elements_moved_total: 0,
             regions: Vec::new(),
             clamp_axis: ([0.0, 1.0, 0.0], 0.0),
+            gauge: ForceGauge::default(),
+            forces: Forces::default(),
         }
     }
 
@@ -206,6 +211,11 @@ impl World {
     /// What the last step did.
     pub fn last_step(&self) -> &StepCounters {
         &self.last
+    }
+
+    /// The forces the tissue exerted on the instruments in the last step, newtons.
+    pub fn forces(&self) -> &Forces {
+        &self.forces
     }
 
     /// Elements moved by every chain reaction so far.
@@ -302,6 +312,12 @@ impl World {
         }
         self.tissue.end_step();
         c.phase_us[5] = ms(t);
+
+        // Forces on the instruments, from the links of what they touch.
+        let t = Instant::now();
+        let dt = self.step_seconds() as f32;
+        self.forces = self.gauge.measure(&mut self.tissue, &self.instrument, dt);
+        c.phase_us[6] = ms(t);
 
         // Bookkeeping.
         self.step += 1;

@@ -502,7 +502,7 @@ impl Tissue {
     ) -> Self {
         let n = body.element_count();
         let (extent_lo, extent_span) = fraction_extent(&geometry, body.lattice().rest_positions());
-        Tissue {
+        let mut tissue = Tissue {
             ws: Workspace::new(&body),
             extent_lo,
             extent_span,
@@ -529,7 +529,12 @@ impl Tissue {
             jaws: Default::default(),
             blade_half_width: 0.5 * crate::instrument::BLADE_WIDTH,
             on_surface,
-        }
+            forces: Default::default(),
+            cut_energy: 0.0,
+            probe_contact: None,
+        };
+        tissue.forces = super::force::LinkFactors::of(&tissue);
+        tissue
     }
 }
 

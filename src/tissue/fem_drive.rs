@@ -35,6 +35,9 @@ pub struct FemDrive {
     dynamic: Option<DynamicModel>,
     /// Condensed displacement (static mode).
     u: Vec<f64>,
+    /// The force the block exerts on whatever drives its node (minus the force imposing the
+    /// displacement), newtons.
+    reaction: [f32; 3],
 }
 
 impl FemDrive {
@@ -66,7 +69,7 @@ impl FemDrive {
             None
         };
         let u = vec![0.0; model.condensed_dofs()];
-        Ok(Self { model, dynamic, u })
+        Ok(Self { model, dynamic, u, reaction: [0.0; 3] })
     }
 
     /// Imposes `displacement` (metres) on the surface node of element `e` and returns every surface
@@ -79,6 +82,7 @@ impl FemDrive {
     ) -> Result<(), FemError> {
         let d = displacement.map(f64::from);
         let forces = self.model.impose(&[(NodeId(e.0), d)], &mut self.u)?;
+        self.reaction = forces.first().map_or([0.0; 3], |f| f.map(|x| -x as f32));
         if let Some(dynamic) = &mut self.dynamic {
             let u = dynamic.step(&[(NodeId(e.0), forces[0])])?;
             self.u.copy_from_slice(u);
@@ -91,9 +95,15 @@ impl FemDrive {
         Ok(())
     }
 
+    /// The force the block exerts on the instrument driving its node, newtons (zero when let go).
+    pub fn reaction(&self) -> [f32; 3] {
+        self.reaction
+    }
+
     /// Lets go: no imposed displacement, the block returns to rest.
     pub fn release(&mut self, mut out: impl FnMut(ElementId, [f32; 3])) {
         self.u.fill(0.0);
+        self.reaction = [0.0; 3];
         if let Some(d) = &mut self.dynamic {
             d.reset();
         }

@@ -16,6 +16,7 @@ mod build;
 mod cut;
 mod fem_drive;
 mod grasp;
+mod force;
 mod mesh;
 mod settle;
 mod spec;
@@ -177,6 +178,12 @@ pub struct Tissue {
     /// [`Tissue::surface_fractions`]).
     pub(crate) extent_lo: [f32; 3],
     pub(crate) extent_span: [f32; 3],
+    /// Spring constants' geometric factors and cut areas per link (see `force.rs`).
+    pub(crate) forces: force::LinkFactors,
+    /// Energy spent cutting since it was last taken, joules.
+    pub(crate) cut_energy: f32,
+    /// The element the probe pressed on in the last push.
+    pub(crate) probe_contact: Option<ElementId>,
 }
 
 impl Tissue {
@@ -425,6 +432,7 @@ impl Tissue {
     /// The probe: a ball of `radius` at world point `tip` pushes the surface of the outermost layer
     /// (layered) or the top of a volume where it meets it. Returns the elements moved.
     pub fn push(&mut self, tip: [f32; 3], radius: f32) -> u32 {
+        self.probe_contact = None;
         let Some(e) = self.nearest_element(tip, Some(0)) else { return 0 };
         let Ok(p) = self.body.position(e) else { return 0 };
         let t = self.geometry.to_lattice(tip, p[0]);
@@ -444,6 +452,9 @@ impl Tissue {
         let l = lateral.min(0.7 * radius);
         let depth = (radius * radius - l * l).sqrt();
         let limit = t[axis] - depth;
+        if p[axis] >= limit - 0.01 * self.spacing {
+            self.probe_contact = Some(e);
+        }
         if p[axis] <= limit {
             return 0;
         }
@@ -603,6 +614,9 @@ impl Tissue {
             return false;
         }
         let kind = self.link_kind[l.index()];
+        if reason == BreakReason::Cut {
+            self.cut_energy += self.cut_energy(l);
+        }
         match (reason, kind) {
             (BreakReason::Tear, _) => self.damage.links_torn += 1,
             (BreakReason::Cut, LinkKind::Connective) => self.damage.connective_links_cut += 1,

@@ -4,8 +4,10 @@
 //!
 //! Must not import wgpu, winit or egui.
 
+mod force;
 mod report;
 
+pub use force::{ForceAssessment, ForceStats, InstrumentForce};
 pub use report::{ReportError, report_json, write_plot, write_report};
 
 use serde::{Deserialize, Serialize};
@@ -90,6 +92,17 @@ pub struct Goals {
     /// Time allowed, seconds. Default: none.
     #[serde(default)]
     pub time_limit_s: Option<f32>,
+    /// Force on an instrument above which the tissue is handled too roughly, newtons. Default
+    /// [`DEFAULT_FORCE_LIMIT`].
+    #[serde(default = "default_force_limit")]
+    pub force_limit: f32,
+}
+
+/// Default force limit, newtons.
+pub const DEFAULT_FORCE_LIMIT: f32 = 1.0;
+
+fn default_force_limit() -> f32 {
+    DEFAULT_FORCE_LIMIT
 }
 
 impl Goals {
@@ -157,6 +170,8 @@ pub struct Assessment {
     pub score: f32,
     /// How the score was made.
     pub breakdown: Vec<ScoreItem>,
+    /// Forces on the instruments and on the forbidden region.
+    pub force: ForceAssessment,
 }
 
 /// A point of the session's history, for the report's plot.
@@ -168,6 +183,9 @@ pub struct Sample {
     pub completion: f32,
     /// Stretch then.
     pub stretch: f32,
+    /// Force on the instrument in hand (or the clamp) then, newtons.
+    #[serde(default)]
+    pub force_n: f32,
 }
 
 /// Reference path length for the economy score, metres: a careful session needs about this much.
@@ -198,6 +216,7 @@ pub struct Assessor {
     grasps: u32,
     history: Vec<Sample>,
     next_sample: f32,
+    force: force::ForceMeter,
 }
 
 impl Assessor {
@@ -226,6 +245,10 @@ impl Assessor {
                 }
             }
         }
+        let tissue = world.tissue();
+        let in_forbidden =
+            force::elements_in(tissue, |u, v| goals.forbidden.iter().any(|r| r.contains(u, v)));
+        let force = force::ForceMeter::new(goals.force_limit, world.step_seconds() as f32, in_forbidden);
         Self {
             goals,
             dt: world.step_seconds() as f32,
@@ -243,6 +266,7 @@ impl Assessor {
             grasps: 0,
             history: Vec::new(),
             next_sample: 0.0,
+            force,
         }
     }
 
@@ -269,11 +293,12 @@ impl Assessor {
             self.grasps += 1;
         }
         self.grasping = grasping;
+        self.force.observe(world);
         let t = self.steps as f32 * self.dt;
         if t >= self.next_sample {
             self.next_sample = t + SAMPLE_EVERY_S;
             let completion = self.completion(world.tissue()).0;
-            self.history.push(Sample { t, completion, stretch });
+            self.history.push(Sample { t, completion, stretch, force_n: self.force.last() });
         }
     }
 
@@ -364,6 +389,7 @@ impl Assessor {
             grasps: self.grasps,
             score,
             breakdown,
+            force: self.force.assessment(),
         }
     }
 }

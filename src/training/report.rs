@@ -48,9 +48,15 @@ pub fn report_json(assessment: &Assessment, history: &[Sample]) -> Result<String
     serde_json::to_string_pretty(&Report { assessment, history })
 }
 
-/// Draws stretch and completion over time into a PNG of 800 x 450 pixels.
-pub fn write_plot(path: &Path, history: &[Sample], stretch_limit: f32) -> Result<(), ReportError> {
-    let (w, h) = (800u32, 450u32);
+/// Draws stretch and completion over time, and below them the force on the instrument against
+/// `force_limit` (newtons), into a PNG of 800 x 650 pixels.
+pub fn write_plot(
+    path: &Path,
+    history: &[Sample],
+    stretch_limit: f32,
+    force_limit: f32,
+) -> Result<(), ReportError> {
+    let (w, h) = (800u32, 650u32);
     let mut buf = vec![0u8; (w * h * 3) as usize];
     let fail = |e: &dyn std::fmt::Display| ReportError::Plot {
         path: path.display().to_string(),
@@ -61,8 +67,10 @@ pub fn write_plot(path: &Path, history: &[Sample], stretch_limit: f32) -> Result
     #[cfg(not(target_arch = "wasm32"))]
     let _ = register_font("sans-serif", FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT);
     {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let whole = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        whole.fill(&WHITE).map_err(|e| fail(&e))?;
+        let (root, below) = whole.split_vertically(450);
+        super::force::draw_force(&below, history, force_limit).map_err(|e| fail(&e))?;
         let t_max = history.last().map(|s| s.t).unwrap_or(1.0).max(0.01);
         let s_max = history.iter().map(|s| s.stretch).fold(stretch_limit, f32::max) * 1.1;
         let mut chart = ChartBuilder::on(&root)
@@ -112,7 +120,7 @@ pub fn write_plot(path: &Path, history: &[Sample], stretch_limit: f32) -> Result
             .label_font(("sans-serif", 14))
             .draw()
             .map_err(|e| fail(&e))?;
-        root.present().map_err(|e| fail(&e))?;
+        whole.present().map_err(|e| fail(&e))?;
     }
     let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| fail(&"buffer size"))?;
     img.save(path).map_err(|e| fail(&e))

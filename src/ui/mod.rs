@@ -6,6 +6,7 @@
 //! import egui and the simulation side's public types; never winit or wgpu.
 
 mod assessment;
+mod force;
 mod help;
 mod instruments;
 mod materials;
@@ -15,6 +16,7 @@ mod simulation;
 mod timing;
 
 pub use assessment::AssessmentPanel;
+pub use force::ForcePanel;
 pub use help::{BINDINGS, HelpOverlay};
 pub use instruments::{InstrumentBar, ToolState};
 pub use materials::MaterialPanel;
@@ -123,6 +125,8 @@ pub struct TraineeUi {
     pub simulation: SimulationPanel,
     /// Live figures.
     pub assessment: AssessmentPanel,
+    /// Force on the instrument in hand, live.
+    pub force: ForcePanel,
     /// Step counters per phase (shown here only in single-window mode).
     pub monitor: MonitorPanel,
     /// Key bindings.
@@ -153,6 +157,9 @@ impl TraineeUi {
                     egui::CollapsingHeader::new("Assessment")
                         .default_open(true)
                         .show(ui, |ui| self.assessment.ui(ui, frame, actions));
+                    egui::CollapsingHeader::new("Force")
+                        .default_open(true)
+                        .show(ui, |ui| self.force.ui(ui, frame, actions));
                     egui::CollapsingHeader::new("Simulation")
                         .default_open(true)
                         .show(ui, |ui| self.simulation.ui(ui, frame, actions));
@@ -177,6 +184,8 @@ pub struct ObserverUi {
     pub monitor: MonitorPanel,
     /// Live figures.
     pub assessment: AssessmentPanel,
+    /// Force on the instrument in hand, live.
+    pub force: ForcePanel,
     /// Key bindings.
     pub help: HelpOverlay,
 }
@@ -192,6 +201,8 @@ impl ObserverUi {
                     self.monitor.ui(ui, frame, actions);
                 });
                 egui::ScrollArea::vertical().id_salt("assessment").show(&mut cols[1], |ui| {
+                    ui.heading("Force");
+                    self.force.ui(ui, frame, actions);
                     ui.heading("Assessment");
                     self.assessment.ui(ui, frame, actions);
                 });

@@ -1,0 +1,108 @@
+//! The force gauge: every step, the force the tissue exerts on each instrument, in newtons (see
+//! `tissue/force.rs` for the springs behind it).
+//!
+//! - Forceps: the pull of their links on the elements held (also while clamped and another
+//!   instrument is in hand).
+//! - Probe: the push-back of the links of the element it presses on, while it touches the tissue.
+//! - Scalpel: the cutting resistance, the energy spent cutting over the distance the blade travelled,
+//!   both smoothed over [`CUT_WINDOW_S`] so that links cut one at a time give a steady force; it points
+//!   against the blade's motion.
+//!
+//! Must not import wgpu, winit or egui.
+
+use serde::{Deserialize, Serialize};
+
+use super::InstrumentKind;
+use crate::instrument::Instrument;
+use crate::tissue::Tissue;
+
+/// Time constant of the scalpel's smoothing, seconds.
+pub const CUT_WINDOW_S: f32 = 0.02;
+
+/// The forces of one step, newtons, world axes: what the tissue exerts on each instrument.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Forces {
+    /// On the forceps (zero when they hold nothing).
+    pub forceps: [f32; 3],
+    /// On the probe (zero out of contact or not in hand).
+    pub probe: [f32; 3],
+    /// On the scalpel (zero when not cutting).
+    pub scalpel: [f32; 3],
+    /// Which instrument is in hand: its force is what a haptic device renders.
+    pub in_hand: InstrumentKind,
+}
+
+impl Forces {
+    /// The force on an instrument.
+    pub fn on(&self, kind: InstrumentKind) -> [f32; 3] {
+        match kind {
+            InstrumentKind::Forceps => self.forceps,
+            InstrumentKind::Probe => self.probe,
+            InstrumentKind::Scalpel => self.scalpel,
+        }
+    }
+
+    /// The force on the instrument in hand.
+    pub fn in_hand(&self) -> [f32; 3] {
+        self.on(self.in_hand)
+    }
+
+    /// Its magnitude, newtons.
+    pub fn magnitude(kind_force: [f32; 3]) -> f32 {
+        (kind_force[0] * kind_force[0] + kind_force[1] * kind_force[1] + kind_force[2] * kind_force[2]).sqrt()
+    }
+}
+
+/// Reads the forces step by step; keeps the scalpel's smoothing.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct ForceGauge {
+    /// Smoothed energy spent cutting, joules.
+    energy: f32,
+    /// Smoothed blade travel, metres.
+    travel: f32,
+    /// Direction of the blade's last move (unit).
+    heading: [f32; 3],
+    last_target: Option<[f32; 3]>,
+}
+
+impl ForceGauge {
+    /// The forces after a step of `dt` seconds.
+    pub(crate) fn measure(&mut self, tissue: &mut Tissue, inst: &Instrument, dt: f32) -> Forces {
+        let mut out = Forces { in_hand: inst.kind, ..Forces::default() };
+        if let Some(e) = inst.grasped {
+            out.forceps = tissue.force_on(&[e]);
+        }
+        if inst.kind == InstrumentKind::Probe
+            && let Some(e) = tissue.probe_contact()
+        {
+            out.probe = tissue.force_on(&[e]);
+        }
+        // The scalpel: energy over distance, both decaying with the same time constant.
+        let energy = tissue.take_cut_energy();
+        let decay = (-dt / CUT_WINDOW_S).exp();
+        let moved = match self.last_target {
+            Some(p) => [inst.target[0] - p[0], inst.target[1] - p[1], inst.target[2] - p[2]],
+            None => [0.0; 3],
+        };
+        self.last_target = Some(inst.target);
+        let d = Forces::magnitude(moved);
+        if d > 0.0 {
+            self.heading = moved.map(|x| x / d);
+        }
+        if inst.kind == InstrumentKind::Scalpel && inst.cutting {
+            // A blade that stops feels its resistance fade: only the energy decays then.
+            self.energy = self.energy * decay + energy;
+            if d > 0.0 {
+                self.travel = self.travel * decay + d;
+            }
+        } else {
+            self.energy = 0.0;
+            self.travel = 0.0;
+        }
+        if self.energy > 0.0 && self.travel > 0.0 {
+            let f = self.energy / self.travel;
+            out.scalpel = self.heading.map(|x| -f * x);
+        }
+        out
+    }
+}

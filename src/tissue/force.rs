@@ -1,0 +1,281 @@
+//! Forces in newtons: each link is a spring whose constant comes from its material's Young's modulus
+//! (and a layer's thickness) and from the rest geometry around it, so that what the tissue exerts on an
+//! instrument (the forceps' pull on what they hold, the probe's contact force, the scalpel's cutting
+//! resistance) is in newtons and does not depend on the element spacing.
+//!
+//! - A layer's link of rest length `L` and width `w` (half the perpendicular links at each end, the
+//!   tributary width of a spring network) stands for a strip of membrane `w` wide and `t` thick: a
+//!   spring of `E·t·w/L` N/m, which is `E·t` on a square grid at any spacing. Membranes buckle rather
+//!   than push: only tension counts.
+//! - A connective fibre of length `L` stands for the connective tissue over its elements' area `A`
+//!   (divided by the fibres' density): `E·A/L`, tension only.
+//! - A volume's link stands for the cross-section `A` around it: `E·A/L`, in tension and compression.
+//!
+//! The force on a set of elements is the sum of their links' forces (links between two elements of the
+//! set cancel), read only from those elements: nothing here walks the body. Cutting a link costs its
+//! material's toughness times the area the blade cuts through (`t·w` in a layer, `L·√A` for a fibre,
+//! `A` in a volume).
+//!
+//! Must not import wgpu, winit or egui.
+
+use super::{Geometry, LinkKind, Tissue};
+use crate::chainmail::{ElementId, LinkId};
+
+/// Each link's geometric factor: `k = E·t·factor` for a layer on a surface, `E·factor` otherwise.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct LinkFactors {
+    /// Per link: `w / L` (layers on a surface) or `A / L` (fibres, volumes), in 1/1 or metres.
+    factor: Vec<f32>,
+    /// Per link: the cross-section a blade cuts through, as a factor of the thickness for layers on a
+    /// surface (`w`) or in square metres otherwise.
+    cut: Vec<f32>,
+}
+
+/// How a link carries load.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Spring {
+    /// A strip of membrane: `E·t·w/L`, tension only.
+    Membrane,
+    /// A connective fibre: `E·A/L`, tension only.
+    Fibre,
+    /// A bar of a solid: `E·A/L`, tension and compression.
+    Solid,
+}
+
+fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn norm(a: [f32; 3]) -> f32 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+impl LinkFactors {
+    /// The factors of every link of a built tissue, from its rest geometry.
+    pub(crate) fn of(tissue: &Tissue) -> Self {
+        let body = &tissue.body;
+        let lattice = body.lattice();
+        let rest = lattice.rest_positions();
+        let world = |e: ElementId| tissue.geometry.to_world(rest[e.index()]);
+        let links = body.link_count();
+        // Share of element pairs joined by a fibre: each fibre stands for 1/density cells.
+        let fibres = tissue.link_kind.iter().filter(|k| **k == LinkKind::Connective).count();
+        let density = if tissue.sheet > 0 && fibres > 0 { fibres as f32 / tissue.sheet as f32 } else { 1.0 };
+        let mut factor = vec![0.0; links];
+        let mut cut = vec![0.0; links];
+        for (l, (f, c)) in factor.iter_mut().zip(cut.iter_mut()).enumerate() {
+            let id = LinkId(l as u32);
+            let Some([a, b]) = lattice.link_ends(id) else { continue };
+            let kind = tissue.link_kind[l];
+            let r = sub(world(b), world(a));
+            let len = norm(r).max(f32::MIN_POSITIVE);
+            // Links roughly perpendicular to this one at either end: half of each on either side make
+            // up the tributary width (a layer) or the side of the tributary square (fibres, volumes).
+            let mut perp = 0.0;
+            for end in [a, b] {
+                for (n, m) in lattice.neighbours(end) {
+                    let other = tissue.link_kind[m.index()];
+                    let related = if kind == LinkKind::Connective { other != kind } else { other == kind };
+                    if m == id || !related {
+                        continue;
+                    }
+                    let s = sub(world(n), world(end));
+                    let sl = norm(s);
+                    let cos = (s[0] * r[0] + s[1] * r[1] + s[2] * r[2]) / (sl * len).max(f32::MIN_POSITIVE);
+                    if cos.abs() < 0.5 {
+                        perp += sl;
+                    }
+                }
+            }
+            match spring(tissue, kind) {
+                Spring::Membrane => {
+                    let w = perp / 4.0;
+                    *f = w / len;
+                    *c = w;
+                }
+                Spring::Fibre => {
+                    let side = perp / 8.0;
+                    let area = side * side / density;
+                    *f = area / len;
+                    *c = len * area.sqrt();
+                }
+                Spring::Solid => {
+                    let side = perp / 8.0;
+                    *f = side * side / len;
+                    *c = side * side;
+                }
+            }
+        }
+        Self { factor, cut }
+    }
+}
+
+fn spring(tissue: &Tissue, kind: LinkKind) -> Spring {
+    match (kind, tissue.geometry) {
+        (LinkKind::Connective, _) => Spring::Fibre,
+        (LinkKind::Layer(_), Geometry::Surface(_)) => Spring::Membrane,
+        (LinkKind::Layer(_), Geometry::Volume) => Spring::Solid,
+    }
+}
+
+impl Tissue {
+    /// Spring constant of a link, newtons per metre, from its material as it is now.
+    pub fn link_stiffness(&self, l: LinkId) -> f32 {
+        let (Some(&g), Some(&kind)) = (self.forces.factor.get(l.index()), self.link_kind.get(l.index()))
+        else {
+            return 0.0;
+        };
+        let Some(m) = self.body.link_material(l).and_then(|m| self.body.material(m)) else { return 0.0 };
+        match spring(self, kind) {
+            Spring::Membrane => m.young_modulus * m.thickness * g,
+            Spring::Fibre | Spring::Solid => m.young_modulus * g,
+        }
+    }
+
+    /// The force an intact link exerts on its element `from`, newtons (world axes): towards the other
+    /// end when stretched, away from it when a solid's link is compressed; zero for a broken link.
+    fn link_force_on(&self, l: LinkId, from: ElementId, to: ElementId) -> [f32; 3] {
+        if !self.body.link_intact(l) {
+            return [0.0; 3];
+        }
+        let (Some(pa), Some(pb)) = (self.world_position(from), self.world_position(to)) else {
+            return [0.0; 3];
+        };
+        let d = sub(pb, pa);
+        let len = norm(d);
+        let rest = self.rest_len.get(l.index()).copied().unwrap_or(len);
+        let mut extension = len - rest;
+        let kind = self.link_kind[l.index()];
+        if spring(self, kind) != Spring::Solid {
+            extension = extension.max(0.0);
+        }
+        if extension == 0.0 || len <= 0.0 {
+            return [0.0; 3];
+        }
+        let s = self.link_stiffness(l) * extension / len;
+        [s * d[0], s * d[1], s * d[2]]
+    }
+
+    /// Tension of a link, newtons: positive when it pulls its ends together, negative when a solid's
+    /// link pushes them apart, zero when broken or slack.
+    pub fn link_tension(&self, l: LinkId) -> f32 {
+        let Some([a, b]) = self.body.lattice().link_ends(l) else { return 0.0 };
+        let (Some(pa), Some(pb)) = (self.world_position(a), self.world_position(b)) else { return 0.0 };
+        let (f, d) = (self.link_force_on(l, a, b), sub(pb, pa));
+        (f[0] * d[0] + f[1] * d[1] + f[2] * d[2]) / norm(d).max(f32::MIN_POSITIVE)
+    }
+
+    /// The force the tissue exerts on a set of elements, newtons (world axes): the sum of their intact
+    /// links' forces, those between two elements of the set cancelling. What forceps holding `held`
+    /// feel, or a probe pressing on them. A finite-element tissue reports its model's reaction at the
+    /// node it last drove instead.
+    pub fn force_on(&self, held: &[ElementId]) -> [f32; 3] {
+        if let Some(fem) = &self.fem {
+            return if held.is_empty() { [0.0; 3] } else { fem.reaction() };
+        }
+        let mut f = [0.0f32; 3];
+        for &e in held {
+            for (n, l) in self.body.lattice().neighbours(e) {
+                let g = self.link_force_on(l, e, n);
+                f = [f[0] + g[0], f[1] + g[1], f[2] + g[2]];
+            }
+        }
+        f
+    }
+
+    /// Energy needed to cut a link, joules: its material's toughness times the area the blade cuts.
+    pub fn cut_energy(&self, l: LinkId) -> f32 {
+        let (Some(&c), Some(&kind)) = (self.forces.cut.get(l.index()), self.link_kind.get(l.index())) else {
+            return 0.0;
+        };
+        let Some(m) = self.body.link_material(l).and_then(|m| self.body.material(m)) else { return 0.0 };
+        match spring(self, kind) {
+            Spring::Membrane => m.toughness * m.thickness * c,
+            Spring::Fibre | Spring::Solid => m.toughness * c,
+        }
+    }
+
+    /// Energy spent cutting since the last call, joules (taken).
+    pub fn take_cut_energy(&mut self) -> f32 {
+        std::mem::take(&mut self.cut_energy)
+    }
+
+    /// The elements disturbed since relaxation last converged: the only ones whose links' forces may
+    /// have changed.
+    pub fn active_elements(&self) -> &[ElementId] {
+        &self.active
+    }
+
+    /// The element the probe pressed on in the last [`Tissue::push`], if it touched the tissue.
+    pub fn probe_contact(&self) -> Option<ElementId> {
+        self.probe_contact
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::chainmail::Material;
+    use crate::surface::Surface;
+    use crate::tissue::{LayerSpec, LayeredSpec, Pinning, TissueSpec};
+
+    fn sheet(n: usize, material: Material) -> Tissue {
+        let spec = TissueSpec::Layered(LayeredSpec {
+            surface: Surface::Plane { width: 0.04, depth: 0.04 },
+            resolution: [n, n],
+            u_coords: None,
+            v_coords: None,
+            layers: vec![LayerSpec { name: "skin".into(), color: [1.0; 4], offset: 0.0, material }],
+            connective: None,
+            pinned: Pinning::Boundary,
+        });
+        Tissue::build(&spec).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn membrane_springs_are_e_times_t_at_any_spacing() {
+        let m = Material { young_modulus: 2.0e6, thickness: 5.0e-4, ..Material::default() };
+        for n in [9, 17, 33] {
+            let t = sheet(n, m);
+            // An interior link (the middle row's first link along u from the centre).
+            let c = ElementId((n / 2 + n * (n / 2)) as u32);
+            let (_, l) = t.body().lattice().neighbours(c).next().unwrap_or_else(|| panic!("no link"));
+            let k = t.link_stiffness(l);
+            assert!((k - 1000.0).abs() < 1.0, "{n}: k = {k}");
+        }
+    }
+
+    #[test]
+    fn a_uniformly_stretched_sheet_pulls_its_edge_by_tension_times_length() {
+        // Every element moved out by 10 % from the centre: uniform biaxial strain 0.1, tension
+        // E·t·0.1 N/m on any cut. The net pull on one interior element is zero, on the whole right
+        // column minus its corners it is the tension times the column's length.
+        let m = Material { young_modulus: 1.0e6, thickness: 1.0e-3, ..Material::relative(2.0, 0.5, 1.0) };
+        for n in [11, 21] {
+            let mut t = sheet(n, m);
+            let rest: Vec<[f32; 3]> = t.body().lattice().rest_positions().to_vec();
+            for (i, p) in rest.iter().enumerate() {
+                let _ = t.body_mut().set_position(ElementId(i as u32), [1.1 * p[0], 1.1 * p[1], p[2]]);
+            }
+            let mid = ElementId((n / 2 + n * (n / 2)) as u32);
+            let f = t.force_on(&[mid]);
+            assert!(norm(f) < 1e-3, "{n}: interior {f:?}");
+            let column: Vec<ElementId> = (1..n - 1).map(|j| ElementId((n - 1 + n * j) as u32)).collect();
+            let f = t.force_on(&column);
+            // Length of the column (rest, between the corners' half cells): (n - 2) cells of 0.04/(n-1).
+            let expected = 1.0e6 * 1.0e-3 * 0.1 * 0.04 * (n - 2) as f32 / (n - 1) as f32;
+            assert!((-f[0] - expected).abs() < 0.02 * expected, "{n}: {f:?} against {expected}");
+        }
+    }
+
+    #[test]
+    fn slack_membrane_pushes_nothing() {
+        let mut t = sheet(9, Material::default());
+        let e = ElementId(4 + 9 * 4);
+        let p = t.body().positions()[e.index()];
+        let _ = t.body_mut().set_position(e, [p[0] + 0.001, p[1], p[2]]);
+        // One link is compressed (ignored), the opposite one stretched: a pull back along -x only.
+        let f = t.force_on(&[e]);
+        assert!(f[0] < 0.0 && f[1].abs() < 1e-6, "{f:?}");
+    }
+}

@@ -1,0 +1,53 @@
+//! Forces in newtons on the default exercise: the tissue at rest pushes nothing, a careful dissection
+//! handles it with much less force than a careless one, and the figures reach `metrics.json`'s
+//! `assessment.force`.
+
+use dissect::instrument::Command;
+use dissect::runner::run;
+use dissect::scene::{Scene, Script};
+use dissect::simulation::{Forces, InstrumentKind};
+
+fn scene() -> Scene {
+    Scene::load("scenes/meninges.ron").unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn a_grasp_at_rest_feels_nothing() {
+    let scene = scene();
+    let mut world = scene.build_world(false).unwrap_or_else(|e| panic!("{e}"));
+    let p = world.tissue().surface_point(0.5, 0.5, 0.003);
+    world.push(Command::Select(InstrumentKind::Forceps));
+    world.push(Command::MoveTo(p));
+    world.push(Command::Grasp);
+    for _ in 0..20 {
+        world.step();
+    }
+    let f = Forces::magnitude(world.forces().forceps);
+    assert!(world.instrument().grasped.is_some());
+    assert!(f < 1e-3, "{f} N at rest");
+    // Lifting by a millimetre pulls back down.
+    let q = world.tissue().surface_point(0.5, 0.5, 0.004);
+    world.push(Command::MoveTo(q));
+    for _ in 0..50 {
+        world.step();
+    }
+    let f = world.forces().forceps;
+    assert!(f[1] < 0.0, "{f:?}");
+}
+
+fn peak(script: &str) -> dissect::training::ForceAssessment {
+    let scene = scene();
+    let script = Script::load(script).unwrap_or_else(|e| panic!("{e}"));
+    let out = run(&scene, "meninges", &script, "script", None, None).unwrap_or_else(|e| panic!("{e}"));
+    out.metrics.assessment.unwrap_or_else(|| panic!("no assessment")).force
+}
+
+#[test]
+fn careful_hands_use_far_less_force_than_careless_ones() {
+    let careful = peak("scenes/scripts/meninges_careful.ron");
+    let careless = peak("scenes/scripts/meninges_careless.ron");
+    eprintln!("careful {careful:?}\ncareless {careless:?}");
+    assert!(careful.total.peak_n < 0.5 * careless.total.peak_n, "{careful:?}\n{careless:?}");
+    assert!(careful.total.time_above_limit_s < careless.total.time_above_limit_s);
+    assert_eq!(careful.instruments.len(), 3);
+}
