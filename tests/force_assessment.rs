@@ -48,6 +48,5 @@ fn careful_hands_use_far_less_force_than_careless_ones() {
     let careless = peak("scenes/scripts/meninges_careless.ron");
     eprintln!("careful {careful:?}\ncareless {careless:?}");
     assert!(careful.total.peak_n < 0.5 * careless.total.peak_n, "{careful:?}\n{careless:?}");
-    assert!(careful.total.time_above_limit_s < careless.total.time_above_limit_s);
     assert_eq!(careful.instruments.len(), 3);
 }

@@ -16,6 +16,7 @@ fn goals() -> Goals {
         stretch_limit: 1.6,
         separation: 0.003,
         time_limit_s: Some(30.0),
+        force_limit: dissect::training::DEFAULT_FORCE_LIMIT,
     }
 }
 

@@ -2,7 +2,9 @@
 //! `tissue/force.rs` for the springs behind it).
 //!
 //! - Forceps: the pull of their links on the elements held (also while clamped and another
-//!   instrument is in hand).
+//!   instrument is in hand), plus, where the tissue would not follow the jaws (ChainMail holds every
+//!   link within its limits, so the held element stops short of the hand), the links' stiffness times
+//!   the distance it fell short: the tissue resists being pulled further than it can stretch.
 //! - Probe: the push-back of the links of the element it presses on, while it touches the tissue.
 //! - Scalpel: the cutting resistance, the energy spent cutting over the distance the blade travelled,
 //!   both smoothed over [`CUT_WINDOW_S`] so that links cut one at a time give a steady force; it points
@@ -70,7 +72,15 @@ impl ForceGauge {
     pub(crate) fn measure(&mut self, tissue: &mut Tissue, inst: &Instrument, dt: f32) -> Forces {
         let mut out = Forces { in_hand: inst.kind, ..Forces::default() };
         if let Some(e) = inst.grasped {
-            out.forceps = tissue.force_on(&[e]);
+            let f = tissue.force_on(&[e]);
+            // Only while the forceps are in hand: a clamp left on the tissue stays where it is.
+            let short = if inst.kind == InstrumentKind::Forceps {
+                [0, 1, 2].map(|k| inst.target[k] - inst.tip[k])
+            } else {
+                [0.0; 3]
+            };
+            let k = if short == [0.0; 3] || tissue.is_fem() { 0.0 } else { tissue.stiffness_at(&[e]) };
+            out.forceps = [0, 1, 2].map(|i| f[i] - k * short[i]);
         }
         if inst.kind == InstrumentKind::Probe
             && let Some(e) = tissue.probe_contact()

@@ -183,6 +183,16 @@ impl Tissue {
         f
     }
 
+    /// Sum of the spring constants of a set of elements' intact links, newtons per metre: how stiffly
+    /// the tissue resists moving them further.
+    pub fn stiffness_at(&self, held: &[ElementId]) -> f32 {
+        held.iter()
+            .flat_map(|&e| self.body.lattice().neighbours(e))
+            .filter(|&(_, l)| self.body.link_intact(l))
+            .map(|(_, l)| self.link_stiffness(l))
+            .sum()
+    }
+
     /// Energy needed to cut a link, joules: its material's toughness times the area the blade cuts.
     pub fn cut_energy(&self, l: LinkId) -> f32 {
         let (Some(&c), Some(&kind)) = (self.forces.cut.get(l.index()), self.link_kind.get(l.index())) else {
