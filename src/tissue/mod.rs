@@ -15,8 +15,8 @@
 mod build;
 mod cut;
 mod fem_drive;
-mod grasp;
 mod force;
+mod grasp;
 mod mesh;
 mod settle;
 mod spec;
