@@ -18,7 +18,7 @@
 //!
 //! Must not import wgpu, winit or egui.
 
-use super::{Geometry, LinkKind, Tissue};
+use super::{Geometry, LinkKind, Model, Tissue};
 use crate::chainmail::{ElementId, LinkId};
 
 /// Each link's geometric factor: `k = E·t·factor` for a layer on a surface, `E·factor` otherwise.
@@ -170,7 +170,7 @@ impl Tissue {
     /// feel, or a probe pressing on them. A finite-element tissue reports its model's reaction at the
     /// node it last drove instead.
     pub fn force_on(&self, held: &[ElementId]) -> [f32; 3] {
-        if let Some(fem) = &self.fem {
+        if let Model::Fem(fem) = &self.model {
             return if held.is_empty() { [0.0; 3] } else { fem.reaction() };
         }
         let mut f = [0.0f32; 3];

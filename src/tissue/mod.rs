@@ -483,7 +483,7 @@ impl Tissue {
                 self.in_active[e.index()] = false;
                 self.last_move[e.index()] = 0.0;
             }
-        } else if self.fem.is_none() {
+        } else if !self.is_fem() {
             self.prune_region();
         }
         self.settled = false;
