@@ -78,8 +78,11 @@ fn cut_fibres_let_the_layers_part_there_and_not_elsewhere() {
     let t = world.tissue();
     let upper = centre(t, UPPER);
     assert!(height(t, upper) > 0.012);
+    // The forceps' 2 mm jaws hold a patch, not one element, so the tent is wider and the fibres just
+    // outside the cut patch lift its edge a little more: the centre of the lower layer rises about
+    // 2.1 mm while the upper layer goes past 12 mm (it was under 2 mm with one-element jaws).
     assert!(
-        height(t, lower) < 0.002,
+        height(t, lower) < 0.0025,
         "lower layer followed to {} where the fibres were cut",
         height(t, lower)
     );
