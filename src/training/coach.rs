@@ -51,7 +51,7 @@ impl Assessor {
     pub fn advice(&self, world: &World) -> Option<Advice> {
         let tissue = world.tissue();
         let limit = self.goals.stretch_limit;
-        let upper = tissue.layers().last().map_or("tissue", |l| l.name.as_str());
+        let upper = tissue.layers().first().map_or("tissue", |l| l.name.as_str());
         if let Some((at, n)) = self.last_tear
             && self.steps.saturating_sub(at) < self.coach_window()
         {

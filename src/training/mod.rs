@@ -210,7 +210,8 @@ impl Assessor {
             points.push(last);
         }
         let mut incision = vec![Vec::new(); points.len()];
-        let upper = LinkKind::Layer(tissue.layers().len().saturating_sub(1) as u8);
+        // Layers count from the upper one.
+        let upper = LinkKind::Layer(0);
         let (mut target, mut outside, mut forbidden, mut target_pairs) = (vec![], vec![], vec![], vec![]);
         let (mut penalised, mut connective) = (vec![], vec![]);
         let mut rest_gap = 0.0;
@@ -459,7 +460,7 @@ impl Assessor {
         let passed = score >= g.pass.score && completion >= g.pass.completion && forbidden == 0;
 
         // What cost the most points, in the trainee's words.
-        let upper = tissue.layers().last().map_or("upper layer", |l| l.name.as_str());
+        let upper = tissue.layers().first().map_or("upper layer", |l| l.name.as_str());
         let fibre_weight = if incision.is_some() { 30.0 } else { 60.0 };
         let mut lost: Vec<(f32, String)> = Vec::new();
         if let Some(i) = incision {
