@@ -435,7 +435,8 @@ impl Session {
         let base = self.recording_path().unwrap_or_else(|| PathBuf::from("session.ron"));
         let json = base.with_extension("report.json");
         let png = base.with_extension("report.png");
-        let report = assessor.report(&self.world, &self.scene.title, crate::training::utc_now_string());
+        let report =
+            assessor.report(self.episode.world(), &self.scene.title, crate::training::utc_now_string());
         let result = crate::training::write_report(&json, &report)
             .and_then(|()| crate::training::write_plot(&png, &report));
         match result {
