@@ -45,6 +45,10 @@ struct WindowArgs {
     /// Where screenshots (F12 / P) go (default: screenshots/).
     #[arg(long, value_name = "DIR")]
     screenshot_dir: Option<PathBuf>,
+    /// Educator mode: show the material and simulation panels in the trainee's window (without it a
+    /// trainee cannot change the tissue mid-assessment).
+    #[arg(long)]
+    educator: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -165,6 +169,7 @@ fn open_app(
         record: window.record,
         screenshot_dir: window.screenshot_dir,
         source,
+        educator: window.educator,
     };
     match dissect::app::run(options) {
         Ok(()) => Ok(ExitCode::SUCCESS),
@@ -197,7 +202,7 @@ fn run_headless(
             return Ok(ExitCode::FAILURE);
         }
     };
-    let recorder = match record {
+    let mut recorder = match record {
         Some(path) => {
             let source = std::fs::read_to_string(scene_path).unwrap_or_default();
             match dissect::scene::Recorder::create(path, &scene_path.display().to_string(), &source) {
@@ -210,17 +215,16 @@ fn run_headless(
         }
         None => None,
     };
-    let mut result = runner::run(
+    let result = runner::run(
         &scene,
         &scene_path.display().to_string(),
         &script,
         &script_path.display().to_string(),
         steps,
-        recorder,
+        recorder.as_mut(),
     )
     .and_then(|output| runner::write_outputs(out, &output).map(|()| output));
-    if let Ok(output) = &mut result
-        && let Some(r) = output.recorder.take()
+    if let (Some(r), Ok(output)) = (recorder, &result)
         && let Err(e) = r.finish(output.world.step_count())
     {
         eprintln!("cannot finish the recording: {e}");

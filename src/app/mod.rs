@@ -79,6 +79,8 @@ pub struct AppOptions {
     pub screenshot_dir: Option<PathBuf>,
     /// Live, replay or demo.
     pub source: Source,
+    /// Educator mode: the material and simulation panels are shown in the trainee's window.
+    pub educator: bool,
 }
 
 /// Opens the windows and runs until the trainee's window is closed (or `frames` have been drawn).
@@ -144,8 +146,8 @@ impl App {
                     "dissect: {} frames in {seconds:.1} s ({:.1} fps), {} steps ({:.0} steps/s)",
                     state.frames,
                     state.frames as f64 / seconds.max(1e-9),
-                    self.session.world().step_count(),
-                    self.session.world().step_count() as f64 / seconds.max(1e-9)
+                    self.session.world.step_count(),
+                    self.session.world.step_count() as f64 / seconds.max(1e-9)
                 );
             }
             self.session.finish();
@@ -206,14 +208,14 @@ impl App {
             None => None,
         };
         let mut hand = Hand::default();
-        hand.tool.kind = self.session.world().instrument().kind;
-        hand.tool.depth = self.session.world().instrument().depth;
+        hand.tool.kind = self.session.world.instrument().kind;
+        hand.tool.depth = self.session.world.instrument().depth;
         Ok(State {
             gpu,
             renderer,
             trainee,
             observer,
-            trainee_ui: TraineeUi::default(),
+            trainee_ui: TraineeUi { educator: self.options.educator, ..TraineeUi::default() },
             observer_ui: ObserverUi::default(),
             hand,
             modifiers: ModifiersState::empty(),
@@ -237,7 +239,7 @@ impl App {
         if session.poll_reload() {
             let mut dropped = Vec::new();
             state.hand.release(true, &mut dropped);
-            state.hand.tool.kind = session.world().instrument().kind;
+            state.hand.tool.kind = session.world.instrument().kind;
         }
         // A held stroke follows the cursor every frame (also when only the camera or insert changed).
         if state.hand.busy() && session.input_enabled() {
@@ -250,7 +252,7 @@ impl App {
         let assessment = session.assessment();
         let status = session.status();
         let frame = Frame {
-            world: session.world(),
+            world: &session.world,
             scene: &session.scene,
             tool: &state.hand.tool,
             timing: &session.timing,
@@ -260,6 +262,9 @@ impl App {
             status: &status,
             scene_error: session.scene_error.as_deref(),
             message: session.message(),
+            advice: session.advice.as_ref(),
+            reload_pending: session.reload_pending,
+            replay: session.replay_state(),
         };
         let replaying = !frame.input_enabled;
 
@@ -268,6 +273,15 @@ impl App {
             let win = &mut state.trainee;
             let single = win.second_camera.is_some();
             let second = win.second_texture();
+            // The instrument's tip on screen, for the stretch gauge beside it.
+            let ppp = win.egui_ctx.pixels_per_point();
+            let tip = session.world.instrument().tip;
+            state.trainee_ui.gauge_at = win
+                .camera
+                .camera
+                .project(glam::Vec3::from(tip), Vec2::new(win.rect[2], win.rect[3]))
+                .filter(|(_, depth)| (0.0..=1.0).contains(depth))
+                .map(|(px, _)| egui::pos2((win.rect[0] + px.x) / ppp, (win.rect[1] + px.y) / ppp));
             let raw = win.egui_state.take_egui_input(&win.window);
             let mut area = egui::Rect::NOTHING;
             let ui_state = &mut state.trainee_ui;
@@ -309,7 +323,7 @@ impl App {
         }
         if !state.replay_done && session.replay_finished() {
             state.replay_done = true;
-            println!("dissect: replay finished at step {}", session.world().step_count());
+            println!("dissect: replay finished at step {}", session.world.step_count());
         }
         if self.options.frames.is_some_and(|n| state.frames >= n) {
             event_loop.exit();
@@ -351,9 +365,9 @@ fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let (ray, hit) = input::pick(&session.picker, &session.snapshot, &camera, &pointer);
     let mut out = Vec::new();
     if press {
-        state.hand.press(session.world(), &camera, ray, hit, &mut out);
+        state.hand.press(&session.world, &camera, ray, hit, &mut out);
     } else {
-        state.hand.drag(session.world(), ray, hit, &mut out);
+        state.hand.drag(&session.world, ray, hit, &mut out);
     }
     for c in out {
         session.queue(c);
@@ -382,20 +396,30 @@ fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action:
             out.push(Command::SetAxis(state.hand.axis(&state.trainee.camera.camera)));
         }
         Action::SetInsert(mm) if live => state.hand.tool.insert_mm = mm,
-        Action::SetMaterial(id, m) if live => session.set_material(id, m),
-        Action::SetSweeps(n) if live => session.set_sweeps(n),
-        Action::Reload if live && session.reload() => {
+        // Tuning is for educators: a trainee cannot soften the tissue mid-assessment.
+        Action::SetMaterial(id, m) if live && options.educator => session.set_material(id, m),
+        Action::SetSweeps(n) if live && options.educator => session.set_sweeps(n),
+        Action::Reload if live && session.request_reload() => {
             state.hand.release(true, &mut Vec::new());
-            state.hand.tool.kind = session.world().instrument().kind;
+            state.hand.tool.kind = session.world.instrument().kind;
         }
+        Action::ConfirmReload if live && session.reload() => {
+            state.hand.release(true, &mut Vec::new());
+            state.hand.tool.kind = session.world.instrument().kind;
+        }
+        Action::KeepSession => {
+            session.reload_pending = false;
+            session.say("kept the session; press F5 to reload the scene when you are ready");
+        }
+        Action::ReplayPause(p) => session.set_paused(p),
+        Action::ReplaySpeed(x) => session.set_speed(x),
+        Action::ReplaySeek(step) => session.seek(step),
         Action::Report => match session.write_report() {
             Some(summary) => {
                 state.trainee_ui.report.summary = Some(summary);
                 state.trainee_ui.report.open = true;
             }
-            None if session.assessor().is_none() => {
-                session.say("this scene sets no goals: nothing to report")
-            }
+            None if session.assessor.is_none() => session.say("this scene sets no goals: nothing to report"),
             None => {}
         },
         Action::Screenshot => screenshot(state, session, options),
@@ -432,8 +456,15 @@ fn screenshot(state: &mut State, session: &mut Session, options: &AppOptions) {
         views.extend(w.shots());
     }
     let mut saved = Vec::new();
+    let stem = session::date_time_stem();
     for ((camera, w, h), name) in views.into_iter().zip(["trainee", "observer"]) {
-        let path = dir.join(format!("{name}-{}.png", state.shots));
+        // Named by date and time, never overwriting an earlier one.
+        let mut path = dir.join(format!("{stem}-{name}.png"));
+        let mut n = 2;
+        while path.exists() {
+            path = dir.join(format!("{stem}-{n}-{name}.png"));
+            n += 1;
+        }
         let result = render_to_image(&state.gpu, &session.snapshot, &camera, w.max(16), h.max(16))
             .and_then(|image| save_png(&image, &path));
         match result {
@@ -589,6 +620,12 @@ impl ApplicationHandler for App {
             }
             WindowEvent::KeyboardInput { event, .. } => {
                 if consumed || event.state != ElementState::Pressed {
+                    return;
+                }
+                if event.logical_key == Key::Named(NamedKey::Space)
+                    && let Some(r) = session.replay_state()
+                {
+                    session.set_paused(!r.paused);
                     return;
                 }
                 if event.logical_key == Key::Named(NamedKey::Escape) {

@@ -1,6 +1,5 @@
-//! The session: the scene, the episode it runs (the world on its clock, the commands given to it and
-//! recorded, or read from a recording and replayed, the assessment), the scene file watch. No windows
-//! here.
+//! The session: the scene, the world stepping on a fixed clock, the commands given to it (recorded) or
+//! read from a recording (replayed), the assessment, the scene file watch. No windows here.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime};
@@ -8,29 +7,47 @@ use std::time::{Duration, Instant, SystemTime};
 use super::AppError;
 use crate::chainmail::{Material, MaterialId};
 use crate::instrument::{Command as InstrumentCommand, Picker};
-use crate::runner::{Episode, Player, Source};
+use crate::runner::Player;
 use crate::scene::{Action as ScriptAction, DEFAULT_SCENE, DEFAULT_SCENE_PATH, Recorder, Recording, Scene};
-use crate::simulation::{Command, Snapshot, World};
-use crate::training::{Assessment, Assessor};
+use crate::simulation::{Command, FixedClock, Snapshot, World};
+use crate::training::{Advice, Assessment, Assessor};
 use crate::ui::{FrameSample, ReportSummary, Timing};
 
+/// Most steps a frame may run: at 1000 Hz, a frame slower than this many milliseconds falls behind.
+const MAX_STEPS_PER_FRAME: u32 = 100;
 /// Most wall time a frame spends stepping: past it the frame draws and the rest of the steps are
 /// dropped (the simulation falls behind real time instead of the window freezing).
 const SIM_BUDGET_PER_FRAME: Duration = Duration::from_millis(30);
 /// How often the scene file's modification time is checked.
 const WATCH_EVERY: Duration = Duration::from_millis(500);
 
-/// Who drives the session's episode.
+/// Where the world's commands come from.
 pub enum Driver {
     /// The trainee: commands gathered per frame, pushed before the frame's first step and recorded.
     Live {
+        /// Commands gathered since the last step.
+        pending: Vec<Command>,
+        /// The recording, when one could be opened.
+        recorder: Option<Recorder>,
         /// Where recordings go: the first path, then `-2`, `-3`... after reloads.
         record_base: PathBuf,
         /// Recordings started so far.
         recordings: u32,
+        /// Commands recorded in the current recording.
+        recorded: u64,
     },
     /// A recording or script played step by step; user input does not reach the world.
     Replay {
+        /// The player.
+        player: Player,
+        /// The actions played (kept to play again from the start when seeking back).
+        actions: Vec<ScriptAction>,
+        /// The last step the recording reaches.
+        last_step: u64,
+        /// Paused.
+        paused: bool,
+        /// Times real time.
+        speed: f32,
         /// Commands in the recording.
         commands: usize,
         /// What is played (for the status line).
@@ -77,13 +94,17 @@ pub struct Session {
     pub scene_source: String,
     /// The scene's path as given (or the built-in name).
     pub scene_label: String,
-    /// The world on its clock, its assessment, its recording, and where its commands come from.
-    pub episode: Episode,
+    /// The world.
+    pub world: World,
+    /// The fixed-step clock.
+    pub clock: FixedClock,
     /// The world as of the last step, for drawing and picking.
     pub snapshot: Snapshot,
     /// Picking against the snapshot (refreshed when the snapshot changes).
     pub picker: Picker,
     picker_step: Option<u64>,
+    /// The live assessment, when the scene has goals.
+    pub assessor: Option<Assessor>,
     /// Input source.
     pub driver: Driver,
     /// Frame and step times.
@@ -91,6 +112,10 @@ pub struct Session {
     watch: Option<Watch>,
     /// The last failed reload, shown until a good one.
     pub scene_error: Option<String>,
+    /// The scene file changed while the session ran: waiting for the trainee's answer.
+    pub reload_pending: bool,
+    /// What stops the trainee now (refreshed after the steps of each frame).
+    pub advice: Option<Advice>,
     message: Option<(String, Instant)>,
     started: Instant,
     dropped: bool,
@@ -126,14 +151,15 @@ fn numbered(base: &Path, n: u32) -> PathBuf {
     base.with_file_name(format!("{stem}-{n}.ron"))
 }
 
-fn build(scene: &Scene, label: &str, source: Source) -> Result<Episode, AppError> {
+fn build(scene: &Scene, label: &str) -> Result<(World, Option<Assessor>), AppError> {
     // Sessions relax by sweeps only, never by wall time, so that a recording replays bit for bit; a
     // frame that cannot keep up drops steps instead (see `SIM_BUDGET_PER_FRAME`).
     let world = scene
         .build_world(false)
         .map_err(|e| AppError::Scene(format!("{label}: the tissue cannot be built: {e}")))?;
-    let assessor = scene.goals.clone().map(|g| Assessor::new(g, &world));
-    Ok(Episode::new(world, assessor, source))
+    let assessor =
+        scene.goals.clone().map(|g| Assessor::new(g, world.tissue(), f64::from(scene.simulation.rate_hz)));
+    Ok((world, assessor))
 }
 
 impl Session {
@@ -142,23 +168,27 @@ impl Session {
         scene_source: String,
         scene_label: String,
         driver: Driver,
-        source: Source,
     ) -> Result<Self, AppError> {
-        let episode = build(&scene, &scene_label, source)?;
+        let (world, assessor) = build(&scene, &scene_label)?;
+        let clock = FixedClock::new(f64::from(scene.simulation.rate_hz), MAX_STEPS_PER_FRAME);
         let mut snapshot = Snapshot::default();
-        episode.snapshot_into(&mut snapshot);
+        world.snapshot_into(&mut snapshot);
         Ok(Self {
             scene,
             scene_source,
             scene_label,
-            episode,
+            world,
+            clock,
             snapshot,
             picker: Picker::default(),
             picker_step: None,
+            assessor,
             driver,
             timing: Timing::default(),
             watch: None,
             scene_error: None,
+            reload_pending: false,
+            advice: None,
             message: None,
             started: Instant::now(),
             dropped: false,
@@ -176,8 +206,14 @@ impl Session {
             None => (DEFAULT_SCENE.to_string(), DEFAULT_SCENE_PATH.to_string()),
         };
         let scene = Scene::from_str(&source, &label).map_err(|e| AppError::Scene(e.to_string()))?;
-        let driver = Driver::Live { record_base: record, recordings: 0 };
-        let mut session = Self::with(scene, source, label, driver, Source::Live)?;
+        let driver = Driver::Live {
+            pending: Vec::new(),
+            recorder: None,
+            record_base: record,
+            recordings: 0,
+            recorded: 0,
+        };
+        let mut session = Self::with(scene, source, label, driver)?;
         session.watch = path.map(Watch::new);
         session.start_recording();
         Ok(session)
@@ -189,49 +225,74 @@ impl Session {
         let scene = Scene::from_str(&recording.scene_source, &recording.scene)
             .map_err(|e| AppError::Scene(format!("the recorded scene: {e}")))?;
         let commands = recording.actions.iter().filter(|a| matches!(a, ScriptAction::Command(_))).count();
-        let driver = Driver::Replay { commands, label: path.display().to_string() };
-        let source = Source::Script(Player::new(recording.actions));
-        Self::with(scene, recording.scene_source, recording.scene, driver, source)
+        let last_step = crate::scene::Script(recording.actions.clone()).duration_steps();
+        let driver = Driver::Replay {
+            player: Player::new(recording.actions.clone()),
+            actions: recording.actions,
+            last_step,
+            paused: false,
+            speed: 1.0,
+            commands,
+            label: path.display().to_string(),
+        };
+        Self::with(scene, recording.scene_source, recording.scene, driver)
     }
 
     /// Plays a script on a scene (the hidden `--demo-script`, for screenshots and demonstrations).
     pub fn demo(scene_path: Option<&Path>, script_path: &Path) -> Result<Self, AppError> {
         let script = crate::scene::Script::load(script_path).map_err(|e| AppError::Scene(e.to_string()))?;
-        // An empty recording path: nothing is recorded.
         let mut session = Self::live(scene_path, PathBuf::new())?;
+        if let Driver::Live { recorder: Some(r), .. } = &mut session.driver {
+            let _ = std::fs::remove_file(r.path());
+        }
         let commands = script.0.iter().filter(|a| matches!(a, ScriptAction::Command(_))).count();
-        session.driver = Driver::Replay { commands, label: script_path.display().to_string() };
-        session.episode.set_source(Source::Script(Player::new(script.0)));
+        session.driver = Driver::Replay {
+            player: Player::new(script.0.clone()),
+            last_step: script.duration_steps(),
+            actions: script.0,
+            paused: false,
+            speed: 1.0,
+            commands,
+            label: script_path.display().to_string(),
+        };
         Ok(session)
     }
 
     fn start_recording(&mut self) {
-        let Driver::Live { record_base, recordings } = &mut self.driver else {
-            return;
+        let message = {
+            let Driver::Live { recorder, record_base, recordings, recorded, .. } = &mut self.driver else {
+                return;
+            };
+            if record_base.as_os_str().is_empty() {
+                return;
+            }
+            *recordings += 1;
+            *recorded = 0;
+            let path = numbered(record_base, *recordings);
+            match Recorder::create(&path, &self.scene_label, &self.scene_source) {
+                Ok(r) => {
+                    println!("dissect: recording to {}", path.display());
+                    *recorder = Some(r);
+                    None
+                }
+                Err(e) => {
+                    *recorder = None;
+                    Some(format!("cannot record to {}: {e}", path.display()))
+                }
+            }
         };
-        if record_base.as_os_str().is_empty() {
-            return;
-        }
-        *recordings += 1;
-        let path = numbered(record_base, *recordings);
-        match Recorder::create(&path, &self.scene_label, &self.scene_source) {
-            Ok(r) => {
-                println!("dissect: recording to {}", path.display());
-                self.episode.record_to(r);
-            }
-            Err(e) => {
-                let m = format!("cannot record to {}: {e}", path.display());
-                eprintln!("dissect: {m}");
-                self.say(m);
-            }
+        if let Some(m) = message {
+            eprintln!("dissect: {m}");
+            self.say(m);
         }
     }
 
     /// Ends the current recording (at the world's step), printing its path.
     fn finish_recording(&mut self) {
-        let step = self.world().step_count();
-        let recorded = self.episode.recorded();
-        if let Some(r) = self.episode.take_recorder() {
+        let step = self.world.step_count();
+        if let Driver::Live { recorder, recorded, .. } = &mut self.driver
+            && let Some(r) = recorder.take()
+        {
             let path = r.path().to_path_buf();
             match r.finish(step) {
                 Ok(()) => println!(
@@ -245,17 +306,10 @@ impl Session {
 
     /// The recording's path, if recording.
     pub fn recording_path(&self) -> Option<PathBuf> {
-        self.episode.recorder().map(|r| r.path().to_path_buf())
-    }
-
-    /// The world.
-    pub fn world(&self) -> &World {
-        self.episode.world()
-    }
-
-    /// The live assessment, when the scene has goals.
-    pub fn assessor(&self) -> Option<&Assessor> {
-        self.episode.assessor()
+        match &self.driver {
+            Driver::Live { recorder: Some(r), .. } => Some(r.path().to_path_buf()),
+            _ => None,
+        }
     }
 
     /// Whether user input reaches the world.
@@ -268,43 +322,80 @@ impl Session {
     pub fn queue(&mut self, command: impl Into<Command>) {
         use InstrumentCommand::MoveTo;
         let command = command.into();
-        if !self.input_enabled() {
-            return;
+        if let Driver::Live { pending, .. } = &mut self.driver {
+            if pending.is_empty() && command == MoveTo(self.world.instrument().target).into() {
+                return;
+            }
+            if let (Command::Instrument(MoveTo(p)), Some(Command::Instrument(MoveTo(last)))) =
+                (&command, pending.last_mut())
+            {
+                *last = *p;
+                return;
+            }
+            pending.push(command);
         }
-        if self.episode.pending().is_empty() && command == MoveTo(self.world().instrument().target).into() {
-            return;
-        }
-        if let (Command::Instrument(MoveTo(p)), Some(Command::Instrument(MoveTo(last)))) =
-            (&command, self.episode.last_pending_mut())
-        {
-            *last = *p;
-            return;
-        }
-        self.episode.push(command);
     }
 
-    /// Runs the steps a frame of `frame` real time calls for on the world's clock (see
-    /// [`Episode::advance`]): live commands are pushed (and recorded with that step's number) before the
-    /// first of them; a replay feeds its player before each.
+    /// Runs the steps a frame of `frame` real time calls for: live commands are pushed (and recorded
+    /// with that step's number) before the first of them; a replay feeds its player before each.
     pub fn advance(&mut self, frame: Duration) {
+        let frame = match &self.driver {
+            Driver::Replay { paused: true, .. } => Duration::ZERO,
+            Driver::Replay { speed, .. } => frame.mul_f32(*speed),
+            Driver::Live { .. } => frame,
+        };
+        let mut steps = self.clock.advance(frame);
         let t = Instant::now();
-        let a = self.episode.advance(frame, Some(SIM_BUDGET_PER_FRAME));
-        if let Some((path, e)) = self.episode.take_record_error() {
-            eprintln!("dissect: recording stopped: {path}: {e}");
+        let mut step_us = 0.0;
+        let mut ran = 0;
+        if steps > 0
+            && let Driver::Live { pending, recorder, recorded, .. } = &mut self.driver
+        {
+            let step = self.world.step_count();
+            for c in pending.drain(..) {
+                if let Some(r) = recorder {
+                    if let Err(e) = r.record(step, &c) {
+                        eprintln!("dissect: recording stopped: {e}");
+                        *recorder = None;
+                    } else {
+                        *recorded += 1;
+                    }
+                }
+                self.world.push(c);
+            }
         }
-        if let Some(notice) = self.episode.world_mut().tissue_mut().take_notice() {
-            self.say(notice);
+        self.dropped = false;
+        while steps > 0 {
+            if t.elapsed() > SIM_BUDGET_PER_FRAME {
+                self.dropped = true;
+                break;
+            }
+            steps -= 1;
+            if let Driver::Replay { player, .. } = &mut self.driver {
+                player.feed(&mut self.world);
+                if player.finished() {
+                    break;
+                }
+            }
+            step_us += self.world.step().total_us();
+            if let Some(notice) = self.world.tissue_mut().take_notice() {
+                self.say(notice);
+            }
+            ran += 1;
+            if let Some(a) = &mut self.assessor {
+                a.observe(&self.world);
+            }
         }
-        self.dropped = a.dropped;
-        if a.steps > 0 {
-            self.episode.snapshot_into(&mut self.snapshot);
+        if ran > 0 {
+            self.world.snapshot_into(&mut self.snapshot);
+            self.advice = self.assessor.as_ref().and_then(|a| a.advice(&self.world));
         }
         self.timing.push(FrameSample {
             t: self.started.elapsed().as_secs_f64(),
             frame_ms: frame.as_secs_f32() * 1000.0,
             sim_ms: t.elapsed().as_secs_f32() * 1000.0,
-            step_us: if a.steps > 0 { a.step_us / a.steps as f32 } else { 0.0 },
-            steps: a.steps,
+            step_us: if ran > 0 { step_us / ran as f32 } else { 0.0 },
+            steps: ran,
         });
     }
 
@@ -319,30 +410,30 @@ impl Session {
     /// Whether the simulation runs slower than real time: the last frame dropped time, or fewer than
     /// 90 % of the scene's steps per second ran over the last second.
     pub fn behind(&self) -> bool {
-        let rate = self.world().config().rate_hz as f32;
+        let rate = self.world.config().rate_hz as f32;
         let warm = self.started.elapsed() > Duration::from_secs(2);
         let running = !self.replay_finished();
         running
-            && (self.world().is_behind()
+            && (self.clock.is_behind()
                 || self.dropped
                 || (warm && self.timing.steps_per_second() < 0.9 * rate))
     }
 
     /// Whether a replay has played everything.
     pub fn replay_finished(&self) -> bool {
-        matches!(self.driver, Driver::Replay { .. }) && self.episode.finished()
+        matches!(&self.driver, Driver::Replay { player, .. } if player.finished())
     }
 
     /// One line about the session for the status bar.
     pub fn status(&self) -> String {
-        match (&self.driver, self.episode.recorder()) {
-            (Driver::Live { .. }, Some(r)) => {
-                format!("REC {} ({} commands)", r.path().display(), self.episode.recorded())
+        match &self.driver {
+            Driver::Live { recorder: Some(r), recorded, .. } => {
+                format!("REC {} ({recorded} commands)", r.path().display())
             }
-            (Driver::Live { .. }, None) => "not recording".to_string(),
-            (Driver::Replay { label, commands }, _) => format!(
+            Driver::Live { .. } => "not recording".to_string(),
+            Driver::Replay { label, commands, player, .. } => format!(
                 "REPLAY {label} ({commands} commands){}",
-                if self.episode.finished() { " — finished" } else { "" }
+                if player.finished() { " — finished" } else { "" }
             ),
         }
     }
@@ -359,7 +450,7 @@ impl Session {
 
     /// The assessment now.
     pub fn assessment(&self) -> Option<Assessment> {
-        self.assessor().map(|a| a.assessment(self.world()))
+        self.assessor.as_ref().map(|a| a.assessment(&self.world))
     }
 
     /// Replaces a material; a refusal is shown.
@@ -380,7 +471,80 @@ impl Session {
     /// Checks the scene file; reloads it if it changed. Returns true when a new scene runs.
     pub fn poll_reload(&mut self) -> bool {
         let changed = self.watch.as_mut().is_some_and(Watch::changed);
-        changed && self.reload()
+        changed && self.request_reload()
+    }
+
+    /// Whether a reload would throw away work: the clock has started, or commands were recorded.
+    pub fn running(&self) -> bool {
+        let started = self.assessor.as_ref().is_some_and(|a| a.started());
+        started || matches!(self.driver, Driver::Live { recorded, .. } if recorded > 0)
+    }
+
+    /// Reloads at once when nothing would be lost; otherwise asks first (`reload_pending`). Returns
+    /// true when a new scene runs.
+    pub fn request_reload(&mut self) -> bool {
+        if self.input_enabled() && self.running() {
+            self.reload_pending = true;
+            return false;
+        }
+        self.reload()
+    }
+
+    /// Where a replay stands, for its controls.
+    pub fn replay_state(&self) -> Option<crate::ui::ReplayState> {
+        match &self.driver {
+            Driver::Replay { last_step, paused, speed, .. } => Some(crate::ui::ReplayState {
+                step: self.world.step_count(),
+                last_step: *last_step,
+                paused: *paused,
+                speed: *speed,
+            }),
+            Driver::Live { .. } => None,
+        }
+    }
+
+    /// Replay: pause or play on.
+    pub fn set_paused(&mut self, pause: bool) {
+        if let Driver::Replay { paused, .. } = &mut self.driver {
+            *paused = pause;
+        }
+    }
+
+    /// Replay: times real time (0.05 to 16).
+    pub fn set_speed(&mut self, to: f32) {
+        if let Driver::Replay { speed, .. } = &mut self.driver {
+            *speed = to.clamp(0.05, 16.0);
+        }
+    }
+
+    /// Replay: goes to step `target`, playing again from the start when it lies behind (the
+    /// simulation is deterministic, so the same steps give the same tissue).
+    pub fn seek(&mut self, target: u64) {
+        let Driver::Replay { actions, .. } = &self.driver else { return };
+        if target < self.world.step_count() {
+            let actions = actions.clone();
+            let Ok((world, assessor)) = build(&self.scene, &self.scene_label) else { return };
+            self.world = world;
+            self.assessor = assessor;
+            if let Driver::Replay { player, .. } = &mut self.driver {
+                *player = Player::new(actions);
+            }
+        }
+        while self.world.step_count() < target {
+            if let Driver::Replay { player, .. } = &mut self.driver {
+                player.feed(&mut self.world);
+                if player.finished() {
+                    break;
+                }
+            }
+            self.world.step();
+            if let Some(a) = &mut self.assessor {
+                a.observe(&self.world);
+            }
+        }
+        self.world.snapshot_into(&mut self.snapshot);
+        self.advice = self.assessor.as_ref().and_then(|a| a.advice(&self.world));
+        self.picker_step = None;
     }
 
     /// Loads the scene again (from its file, or the built-in text): on success the world restarts (and
@@ -407,7 +571,7 @@ impl Session {
                 return false;
             }
         };
-        let episode = match build(&scene, &self.scene_label, Source::Live) {
+        let (world, assessor) = match build(&scene, &self.scene_label) {
             Ok(x) => x,
             Err(e) => {
                 eprintln!("{e}");
@@ -418,10 +582,17 @@ impl Session {
         self.finish_recording();
         self.scene = scene;
         self.scene_source = source;
-        self.episode = episode;
-        self.episode.snapshot_into(&mut self.snapshot);
+        self.world = world;
+        self.assessor = assessor;
+        self.clock = FixedClock::new(f64::from(self.scene.simulation.rate_hz), MAX_STEPS_PER_FRAME);
+        self.world.snapshot_into(&mut self.snapshot);
         self.picker_step = None;
         self.scene_error = None;
+        self.reload_pending = false;
+        self.advice = None;
+        if let Driver::Live { pending, .. } = &mut self.driver {
+            pending.clear();
+        }
         self.start_recording();
         self.say(format!("reloaded {}", self.scene_label));
         true
@@ -430,13 +601,12 @@ impl Session {
     /// Writes `<recording>.report.json` and `<recording>.report.png` (next to the recording, or in the
     /// current folder) when the scene has goals.
     pub fn write_report(&mut self) -> Option<ReportSummary> {
-        let assessor = self.episode.assessor()?;
-        let assessment = assessor.assessment(self.episode.world());
+        let assessor = self.assessor.as_ref()?;
+        let assessment = assessor.assessment(&self.world);
         let base = self.recording_path().unwrap_or_else(|| PathBuf::from("session.ron"));
         let json = base.with_extension("report.json");
         let png = base.with_extension("report.png");
-        let report =
-            assessor.report(self.episode.world(), &self.scene.title, crate::training::utc_now_string());
+        let report = assessor.report(&self.world, &self.scene.title, crate::training::utc_now_string());
         let result = crate::training::write_report(&json, &report)
             .and_then(|()| crate::training::write_plot(&png, &report));
         match result {
@@ -457,10 +627,7 @@ impl Session {
             self.write_report();
         }
         if let Driver::Replay { commands, .. } = &self.driver {
-            println!(
-                "dissect: replay ended at step {}; {commands} commands played",
-                self.world().step_count()
-            );
+            println!("dissect: replay ended at step {}; {commands} commands played", self.world.step_count());
         }
         self.finish_recording();
     }
@@ -491,15 +658,15 @@ mod tests {
         live.queue(InstrumentCommand::MoveTo([0.002, 0.01, 0.0]));
         live.advance(Duration::from_micros(100)); // no step: the command waits
         live.advance(Duration::from_millis(3));
-        let steps = live.world().step_count();
+        let steps = live.world.step_count();
         assert_eq!(steps, 8);
         live.finish();
         let mut replay = Session::replay(&rec).expect("replay");
         for _ in 0..10 {
             replay.advance(Duration::from_millis(5));
         }
-        assert_eq!(replay.world().step_count(), steps);
-        assert_eq!(replay.world().instrument().target, [0.002, 0.01, 0.0]);
+        assert_eq!(replay.world.step_count(), steps);
+        assert_eq!(replay.world.instrument().target, [0.002, 0.01, 0.0]);
         assert!(replay.replay_finished());
         let _ = std::fs::remove_dir_all(&dir);
     }

@@ -6,6 +6,7 @@
 //! import egui and the simulation side's public types; never winit or wgpu.
 
 mod assessment;
+mod exercise;
 mod help;
 mod instruments;
 mod materials;
@@ -15,6 +16,7 @@ mod simulation;
 mod timing;
 
 pub use assessment::AssessmentPanel;
+pub use exercise::{ExercisePanel, tool_hint, view_overlay};
 pub use help::{BINDINGS, HelpOverlay};
 pub use instruments::{InstrumentBar, ToolState};
 pub use materials::MaterialPanel;
@@ -27,7 +29,7 @@ use crate::chainmail::{Material, MaterialId};
 use crate::scene::Scene;
 use crate::simulation::{InstrumentKind, World};
 use crate::tissue::CutDepth;
-use crate::training::Assessment;
+use crate::training::{Advice, Assessment};
 
 /// What a control asks the app to do.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,6 +58,29 @@ pub enum Action {
     ToggleHelp,
     /// Put the cameras back where the scene has them.
     ResetCameras,
+    /// The scene changed on disk: reload it and restart the session (answering the question).
+    ConfirmReload,
+    /// The scene changed on disk: keep the running session (answering the question).
+    KeepSession,
+    /// Replay: pause (true) or play on.
+    ReplayPause(bool),
+    /// Replay: play at this many times real time.
+    ReplaySpeed(f32),
+    /// Replay: go to this step (back means playing again from the start, quickly).
+    ReplaySeek(u64),
+}
+
+/// Where a replay stands, for its control bar.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReplayState {
+    /// The step shown.
+    pub step: u64,
+    /// The recording's last step.
+    pub last_step: u64,
+    /// Paused.
+    pub paused: bool,
+    /// Times real time.
+    pub speed: f32,
 }
 
 /// Everything a panel may read in one frame.
@@ -80,6 +105,12 @@ pub struct Frame<'a> {
     pub scene_error: Option<&'a str>,
     /// A transient message (screenshot saved, material refused).
     pub message: Option<&'a str>,
+    /// What stops the trainee now, if anything (held by fibres, stretch near the limit, a tear).
+    pub advice: Option<&'a Advice>,
+    /// The scene file changed while a session runs: the trainee is asked before it restarts.
+    pub reload_pending: bool,
+    /// The replay's position and controls, when replaying.
+    pub replay: Option<ReplayState>,
 }
 
 /// A panel: draws itself into `ui` from `frame` and reports what the user asked for in `actions`.
@@ -109,15 +140,18 @@ pub fn status_bar(ui: &mut egui::Ui, frame: &Frame<'_>, role: &str) {
     }
 }
 
-/// The trainee window's panels: instrument bar on the left, tuning and figures on the right, status on
-/// top, help and report on demand.
+/// The trainee window's panels: instrument bar on the left, the exercise and the figures on the right
+/// (the material and simulation panels too in educator mode), status on top, the coach and the tool's
+/// hint over the view, help, report and questions on demand.
 #[derive(Default)]
 pub struct TraineeUi {
     /// Instrument bar.
     pub instruments: InstrumentBar,
-    /// Material sliders.
+    /// Instructions, checklist, clock.
+    pub exercise: ExercisePanel,
+    /// Material sliders (educator mode).
     pub materials: MaterialPanel,
-    /// Relaxation, reload, timing plot.
+    /// Relaxation, reload, timing plot (educator mode).
     pub simulation: SimulationPanel,
     /// Live figures.
     pub assessment: AssessmentPanel,
@@ -127,6 +161,11 @@ pub struct TraineeUi {
     pub help: HelpOverlay,
     /// The last report.
     pub report: ReportWindow,
+    /// Educator mode: the material and simulation panels are shown (a trainee cannot soften the
+    /// tissue mid-assessment without it).
+    pub educator: bool,
+    /// Where the instrument's tip is on screen (points), for the stretch gauge.
+    pub gauge_at: Option<egui::Pos2>,
 }
 
 impl TraineeUi {
@@ -140,21 +179,29 @@ impl TraineeUi {
         actions: &mut Vec<Action>,
     ) -> egui::Rect {
         egui::Panel::top("trainee-status").show(ui, |ui| status_bar(ui, frame, "trainee"));
+        if let Some(r) = frame.replay {
+            egui::Panel::bottom("replay-bar").show(ui, |ui| replay_bar(ui, r, actions));
+        }
         egui::Panel::left("instrument-bar").resizable(false).exact_size(170.0).show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| self.instruments.ui(ui, frame, actions));
         });
-        egui::Panel::right("trainee-side").resizable(true).default_size(250.0).max_size(290.0).show(
+        egui::Panel::right("trainee-side").resizable(true).default_size(270.0).max_size(320.0).show(
             ui,
             |ui| {
                 ui.spacing_mut().slider_width = 90.0;
-                egui::ScrollArea::vertical().show(ui, |ui| {
+                egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+                    egui::CollapsingHeader::new("Exercise")
+                        .default_open(true)
+                        .show(ui, |ui| self.exercise.ui(ui, frame, actions));
                     egui::CollapsingHeader::new("Assessment")
-                        .default_open(true)
+                        .default_open(!with_monitor)
                         .show(ui, |ui| self.assessment.ui(ui, frame, actions));
-                    egui::CollapsingHeader::new("Simulation")
-                        .default_open(true)
-                        .show(ui, |ui| self.simulation.ui(ui, frame, actions));
-                    ui.collapsing("Materials", |ui| self.materials.ui(ui, frame, actions));
+                    if self.educator {
+                        egui::CollapsingHeader::new("Simulation")
+                            .default_open(true)
+                            .show(ui, |ui| self.simulation.ui(ui, frame, actions));
+                        ui.collapsing("Materials", |ui| self.materials.ui(ui, frame, actions));
+                    }
                     if with_monitor {
                         ui.collapsing("Monitor", |ui| self.monitor.ui(ui, frame, actions));
                     }
@@ -162,10 +209,62 @@ impl TraineeUi {
             },
         );
         let rect = ui.available_rect_before_wrap();
+        let view = if with_monitor {
+            egui::Rect::from_min_max(rect.min, egui::pos2(rect.center().x, rect.max.y))
+        } else {
+            rect
+        };
+        view_overlay(ui, view, frame, self.gauge_at);
         self.help.ui(ui, frame, actions);
         self.report.ui(ui, frame, actions);
+        if frame.reload_pending {
+            reload_question(ui, actions);
+        }
         rect
     }
+}
+
+/// Asks whether to restart the session on the changed scene.
+fn reload_question(ui: &egui::Ui, actions: &mut Vec<Action>) {
+    egui::Window::new("The scene file changed")
+        .collapsible(false)
+        .resizable(false)
+        .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
+        .show(ui.ctx(), |ui| {
+            ui.label("Reloading it restarts the session: the tissue, the clock and the score start again, and a new recording begins.");
+            ui.horizontal(|ui| {
+                if ui.button("Reload and restart").clicked() {
+                    actions.push(Action::ConfirmReload);
+                }
+                if ui.button("Keep the session").clicked() {
+                    actions.push(Action::KeepSession);
+                }
+            });
+        });
+}
+
+/// Pause, speed and seek for a replay.
+fn replay_bar(ui: &mut egui::Ui, r: ReplayState, actions: &mut Vec<Action>) {
+    ui.horizontal(|ui| {
+        if ui.button(if r.paused { "▶ play (space)" } else { "⏸ pause (space)" }).clicked() {
+            actions.push(Action::ReplayPause(!r.paused));
+        }
+        ui.label("speed");
+        for speed in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
+            if ui.selectable_label(r.speed == speed, format!("{speed}×")).clicked() {
+                actions.push(Action::ReplaySpeed(speed));
+            }
+        }
+        ui.separator();
+        let mut step = r.step;
+        let last = r.last_step.max(1);
+        ui.spacing_mut().slider_width = (ui.available_width() - 160.0).max(100.0);
+        let slider = egui::Slider::new(&mut step, 0..=last)
+            .text(format!("of {last} steps ({:.1} s)", last as f32 / 1000.0));
+        if ui.add(slider).drag_stopped() || (step != r.step && !ui.ctx().input(|i| i.pointer.any_down())) {
+            actions.push(Action::ReplaySeek(step));
+        }
+    });
 }
 
 /// The observer window's panels: the monitor and the assessment on the right, status on top.
@@ -175,6 +274,8 @@ pub struct ObserverUi {
     pub monitor: MonitorPanel,
     /// Live figures.
     pub assessment: AssessmentPanel,
+    /// Instructions, checklist, clock.
+    pub exercise: ExercisePanel,
     /// Key bindings.
     pub help: HelpOverlay,
 }
@@ -190,6 +291,8 @@ impl ObserverUi {
                     self.monitor.ui(ui, frame, actions);
                 });
                 egui::ScrollArea::vertical().id_salt("assessment").show(&mut cols[1], |ui| {
+                    ui.heading("Exercise");
+                    self.exercise.ui(ui, frame, actions);
                     ui.heading("Assessment");
                     self.assessment.ui(ui, frame, actions);
                 });
