@@ -9,25 +9,28 @@
 //! layer are `(u, v, h)`: the two surface parameters and the offset along the surface normal.
 //!
 //! ## Architecture map
-//! Dependencies point one way: `app → ui, render → simulation → tissue, instrument → chainmail, surface`.
+//! Dependencies point one way: `app → ui, render → runner → scene, training → simulation → instrument →
+//! tissue → chainmail, surface, fem`, and everything may import the leaf [`snapshot`]. No module imports
+//! one above it; `ARCHITECTURE.md` at the top of the repository says more, with a step's data flow.
 //!
 //! | module | owns | may import |
 //! |---|---|---|
 //! | [`chainmail`] | lattices, materials, the chain reaction, relaxation, broken links, grid fast paths | std, serde, thiserror, pulp, rayon, log |
 //! | [`surface`] | parametric surfaces X(u, v) and the (u, v, h) mapping | chainmail |
-//! | [`tissue`] | layers, connective fibres, pins, grasp and push, contact, cuts, tears, meshes | chainmail, surface |
+//! | [`snapshot`] | the shared vocabulary: the snapshot the renderer reads, layer meshes, instrument kind and pose, camera spec | serde only (a leaf) |
 //! | [`fem`] | the linear elastic tetrahedral reference model (condensation, SMVM) and its comparison with ChainMail | std, serde, thiserror, faer, nalgebra, chainmail |
-//! | [`simulation`] | the world, the fixed-step clock, the snapshot the renderer reads | chainmail and the modules below it |
-//! | [`scene`] | RON scenes and scripts: schema, loading, validation, errors at `path:line:column`; builds a world | chainmail, surface, tissue, simulation, serde, ron |
-//! | [`instrument`] | probe, forceps, scalpel: commands, pose, picking with parry3d | chainmail, tissue, simulation (types) |
-//! | [`runner`] | the script player, run metrics and final state (headless runs) | scene, simulation, training |
+//! | [`tissue`] | layers, connective fibres, pins, grasp and push, contact, cuts, tears, meshes; its deformation model (ChainMail or FEM) | chainmail, surface, fem, snapshot |
+//! | [`instrument`] | probe, forceps, scalpel: state, instrument commands, pose, picking with parry3d | chainmail, tissue, snapshot |
+//! | [`simulation`] | the world: its clock and step length, its commands, the ordered phases of a step, the snapshot it fills | chainmail, tissue, instrument, snapshot, web-time |
 //! | [`training`] | exercise goals, live assessment and score, session report and plot | tissue, simulation |
-//! | [`render`] | wgpu device, scene pipelines and buffers, orbit camera and picking rays, headless PNG capture | wgpu, glam, bytemuck, image, `simulation` (snapshot types only); never winit or egui |
+//! | [`scene`] | RON scenes, scripts and recordings: schema, loading, validation, errors at `path:line:column`; builds a world | chainmail, surface, tissue, instrument, simulation, training (goals), serde, ron |
+//! | [`runner`] | the [`runner::Episode`] every driver steps (world, assessor, recorder, command source), the script player, run metrics and final state | scene, simulation, training and below |
+//! | [`render`] | wgpu device, scene pipelines and buffers, orbit camera and picking rays, headless PNG capture | wgpu, glam, bytemuck, image, `snapshot`; never winit or egui |
 //! | [`ui`] | the egui panels, one type per panel (`View`), and the actions they ask for | egui, `World`'s public API, scene, training (types); never winit or wgpu |
-//! | [`app`] | the two windows, the event loop, input to instrument commands, recording and replay, hot reload | winit (only here), egui-winit, egui-wgpu, ui, render, and the simulation side's public API |
+//! | [`app`] | the two windows, the event loop, input to instrument commands, the session (an episode, recording and replay, hot reload) | winit (only here), egui-winit, egui-wgpu, ui, render, and the simulation side's public API (`World`, `Episode`) |
 //!
-//! The simulation side (`chainmail`, `surface`, `tissue`, `instrument`, `simulation`, `scene`,
-//! `training`, `fem`) never imports wgpu, winit or egui.
+//! The simulation side (`snapshot`, `chainmail`, `surface`, `tissue`, `instrument`, `simulation`,
+//! `scene`, `training`, `runner`, `fem`) never imports wgpu, winit or egui.
 
 pub mod app;
 pub mod chainmail;

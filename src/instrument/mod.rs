@@ -59,12 +59,11 @@ impl Default for Instrument {
 impl Instrument {
     /// The pose to draw.
     pub fn pose(&self) -> InstrumentPose {
-        let a = self.axis;
-        let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt().max(1e-9);
+        let a = glam::Vec3::from(self.axis);
         InstrumentPose {
             kind: self.kind,
             tip: self.tip,
-            axis: [a[0] / l, a[1] / l, a[2] / l],
+            axis: (a / a.length().max(1e-9)).to_array(),
             roll: self.roll,
             closed: self.grasped.is_some() && self.kind == InstrumentKind::Forceps,
         }

@@ -65,5 +65,5 @@ impl Picker {
 }
 
 fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
-    (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)
+    glam::Vec3::from(a).distance_squared(glam::Vec3::from(b))
 }

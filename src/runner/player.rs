@@ -28,8 +28,7 @@ impl Motion {
     fn new(path: Vec<[f32; 3]>, steps: u32, end_cut: bool) -> Self {
         let mut lengths = vec![0.0];
         for w in path.windows(2) {
-            let d = ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2) + (w[1][2] - w[0][2]).powi(2))
-                .sqrt();
+            let d = glam::Vec3::from(w[1]).distance(glam::Vec3::from(w[0]));
             lengths.push(lengths.last().copied().unwrap_or(0.0) + d);
         }
         Self { path, lengths, steps: steps.max(1), done: 0, end_cut }

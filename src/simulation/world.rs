@@ -3,6 +3,7 @@
 
 use std::time::Duration;
 
+use glam::Vec3;
 use serde::Serialize;
 use web_time::Instant;
 
@@ -343,9 +344,7 @@ impl World {
                 let pick = [top, None].into_iter().find_map(|layer| {
                     let e = self.tissue.nearest_element(tip, layer)?;
                     let p = self.tissue.world_position(e)?;
-                    let d =
-                        ((p[0] - tip[0]).powi(2) + (p[1] - tip[1]).powi(2) + (p[2] - tip[2]).powi(2)).sqrt();
-                    (d <= GRASP_REACH).then_some(e)
+                    (Vec3::from(p).distance(Vec3::from(tip)) <= GRASP_REACH).then_some(e)
                 });
                 if let Some(e) = pick {
                     self.grasp(e);
@@ -375,9 +374,10 @@ impl World {
                 }
             }
             Command::SetAxis(a) => {
-                let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                let a = Vec3::from(a);
+                let l = a.length();
                 if l.is_finite() && l > 0.0 {
-                    self.instrument.axis = [a[0] / l, a[1] / l, a[2] / l];
+                    self.instrument.axis = (a / l).to_array();
                 }
             }
         }

@@ -1,6 +1,7 @@
 //! Building a tissue from its description: the `(u, v, h)` lattice of one or two layers with their
 //! connective fibres, or a volume; pins; render triangles.
 
+use glam::Vec3;
 use thiserror::Error;
 
 use super::spec::{ConnectiveSpec, Edge, LayerSpec, Pinning};
@@ -93,7 +94,7 @@ impl Tissue {
 }
 
 fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    Vec3::from(a).distance(Vec3::from(b))
 }
 
 fn check_fracs(field: &str, f: &Option<Vec<f32>>, n: usize, wrapped: bool) -> Result<(), TissueError> {
@@ -294,10 +295,10 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
                     world(body.positions()[b.index()]),
                     world(body.positions()[c.index()]),
                 );
-                let n = cross(sub(pb, pa), sub(pc, pa));
+                let (pa, pb, pc) = (Vec3::from(pa), Vec3::from(pb), Vec3::from(pc));
+                let n = (pb - pa).cross(pc - pa);
                 let r = body.positions()[a.index()];
-                let sn = s.surface.normal(r[0], r[1]);
-                let flip = n[0] * sn[0] + n[1] * sn[1] + n[2] * sn[2] < 0.0;
+                let flip = n.dot(Vec3::from(s.surface.normal(r[0], r[1]))) < 0.0;
                 let (t1, t2) = if flip {
                     ([a.0, c.0, b.0], [a.0, d.0, c.0])
                 } else {
@@ -317,14 +318,11 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
                 // sphere's centre, like the pole itself.
                 let (p0, p1) =
                     (world(body.positions()[ring[0] as usize]), world(body.positions()[ring[1] as usize]));
-                let r = (p0[0] * p0[0] + p0[1] * p0[1] + p0[2] * p0[2]).sqrt();
-                let pole = [0.0, if south { -r } else { r }, 0.0];
-                let n = cross(sub(p0, pole), sub(p1, pole));
-                caps.push(super::Cap {
-                    ring,
-                    links,
-                    flip: n[0] * pole[0] + n[1] * pole[1] + n[2] * pole[2] < 0.0,
-                });
+                let (p0, p1) = (Vec3::from(p0), Vec3::from(p1));
+                let r = p0.length();
+                let pole = Vec3::new(0.0, if south { -r } else { r }, 0.0);
+                let n = (p0 - pole).cross(p1 - pole);
+                caps.push(super::Cap { ring, links, flip: n.dot(pole) < 0.0 });
             }
         }
         layers.push(Layer {
@@ -354,7 +352,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
         if nl == 2 { sheet as u32 } else { 0 },
         connective.as_ref().map(|c| c.min_gap).unwrap_or(0.0),
         spacing,
-        None,
+        super::Model::ChainMail,
         vec![true; n],
     ))
 }
@@ -450,8 +448,8 @@ fn build_volume(s: &VolumeSpec, step_seconds: f32) -> Result<Tissue, TissueError
         triangles,
     }];
     let spacing = (0..3).map(|k| s.size[k] / (dims[k] - 1) as f32).fold(f32::MAX, f32::min);
-    let fem = match &s.fem {
-        None => None,
+    let model = match &s.fem {
+        None => super::Model::ChainMail,
         Some(f) => {
             let h: Vec<f32> = (0..3).map(|k| s.size[k] / (dims[k] - 1) as f32).collect();
             if h.iter().any(|x| (x - h[0]).abs() > 1e-4 * h[0]) {
@@ -470,7 +468,7 @@ fn build_volume(s: &VolumeSpec, step_seconds: f32) -> Result<Tissue, TissueError
                 }
             })
             .map_err(|e| invalid("tissue.model", e.to_string()))?;
-            Some(Box::new(drive))
+            super::Model::Fem(Box::new(drive))
         }
     };
     Ok(Tissue::assemble(
@@ -482,7 +480,7 @@ fn build_volume(s: &VolumeSpec, step_seconds: f32) -> Result<Tissue, TissueError
         0,
         0.0,
         spacing,
-        fem,
+        model,
         on_surface,
     ))
 }
@@ -499,7 +497,7 @@ impl Tissue {
         sheet: u32,
         min_gap: f32,
         spacing: f32,
-        fem: Option<Box<super::FemDrive>>,
+        model: super::Model,
         on_surface: Vec<bool>,
     ) -> Self {
         let n = body.element_count();
@@ -524,7 +522,7 @@ impl Tissue {
             max_stretch: 1.0,
             spacing,
             body,
-            fem,
+            model,
             notice: None,
             on_surface,
         }
@@ -557,12 +555,4 @@ pub(crate) fn fraction_extent(geometry: &Geometry, rest: &[[f32; 3]]) -> ([f32; 
         }
     }
     (lo, span.map(|x| x.max(f32::MIN_POSITIVE)))
-}
-
-fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }

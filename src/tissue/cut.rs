@@ -88,7 +88,7 @@ impl Tissue {
 
     /// Applies every queued cut; returns how many links it severed.
     pub fn apply_cuts(&mut self) -> u32 {
-        if self.fem.is_some() {
+        if let super::Model::Fem(_) = self.model {
             if !self.cut_queue.is_empty() {
                 self.cut_queue.clear();
                 self.notice = Some(super::FEM_CUT_REFUSED.to_string());

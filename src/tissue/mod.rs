@@ -23,6 +23,7 @@ pub use cut::{CutDepth, CutSegment};
 pub use fem_drive::{FEM_CUT_REFUSED, FemDrive, FemSpec};
 pub use spec::{ConnectiveSpec, Edge, LayerSpec, Pinning};
 
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::chainmail::{Body, BreakReason, ElementId, LinkId, MaterialId, Pass, RelaxBudget, Workspace};
@@ -118,17 +119,16 @@ pub struct Damage {
     pub links_torn: u64,
 }
 
-/// The result of pulling an element: how far it went in each pass.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Pull {
-    /// Elements moved by the in-plane (or volume) chain reaction.
-    pub moved_plane: u32,
-    /// Elements moved by the normal pass.
-    pub moved_normal: u32,
-    /// World position the element reached.
-    pub achieved: [f32; 3],
-    /// Smallest share of the requested move that the tissue allowed, over both passes.
-    pub fraction: f32,
+/// What moves the tissue when an instrument displaces an element.
+#[derive(Clone, Debug)]
+pub enum Model {
+    /// Gibson's chain reaction (in two passes on a surface), then relaxation; cuts and tears change
+    /// the topology.
+    ChainMail,
+    /// A linear finite-element volume: the displacement is imposed on the condensed, pre-inverted
+    /// model, which gives every surface node's answer. No relaxation, no tears; cuts are refused
+    /// (condensation assumes a fixed topology).
+    Fem(Box<FemDrive>),
 }
 
 /// A deformable tissue.
@@ -157,8 +157,8 @@ pub struct Tissue {
     /// Largest link stretch (world length over rest length) seen at the last check.
     pub(crate) max_stretch: f32,
     pub(crate) spacing: f32,
-    /// A finite-element model that drives this (volume) tissue instead of ChainMail.
-    pub(crate) fem: Option<Box<FemDrive>>,
+    /// What moves the elements: ChainMail, or a finite-element model (volumes).
+    pub(crate) model: Model,
     /// Something the trainee should be told (a refused cut).
     pub(crate) notice: Option<String>,
     /// Elements on the outer surface (vertices of a drawn triangle): what instruments can touch.
@@ -271,7 +271,7 @@ impl Tissue {
                     continue;
                 }
                 let w = self.geometry.to_world(self.body.positions()[i as usize]);
-                let d = (w[0] - p[0]).powi(2) + (w[1] - p[1]).powi(2) + (w[2] - p[2]).powi(2);
+                let d = Vec3::from(w).distance_squared(Vec3::from(p));
                 if best.is_none_or(|(bd, _)| d < bd) {
                     best = Some((d, i));
                 }
@@ -305,7 +305,7 @@ impl Tissue {
     pub fn set_held(&mut self, e: ElementId, held: bool) {
         // Out-of-range ids are ignored: the instrument only holds ids this tissue issued.
         let _ = self.body.set_held(e, held);
-        if !held && let Some(fem) = &mut self.fem {
+        if !held && let Model::Fem(fem) = &mut self.model {
             let body = &mut self.body;
             fem.release(|n, _| {
                 let r = body.lattice().rest_positions()[n.index()];
@@ -314,9 +314,14 @@ impl Tissue {
         }
     }
 
+    /// What moves the tissue.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
     /// Whether a finite-element model drives this tissue.
     pub fn is_fem(&self) -> bool {
-        self.fem.is_some()
+        matches!(self.model, Model::Fem(_))
     }
 
     /// The last thing the trainee should be told (a refused cut), taken.
@@ -324,22 +329,32 @@ impl Tissue {
         self.notice.take()
     }
 
-    /// Imposes a displacement on a finite-element volume at element `e`; returns the surface nodes moved.
-    fn fem_impose(&mut self, e: ElementId, target: [f32; 3]) -> u32 {
-        let Some(fem) = &mut self.fem else { return 0 };
-        let body = &mut self.body;
-        let r = body.lattice().rest_positions()[e.index()];
-        let d = [target[0] - r[0], target[1] - r[1], target[2] - r[2]];
-        let mut moved = 0;
-        let result = fem.impose(e, d, |n, u| {
-            let r = body.lattice().rest_positions()[n.index()];
-            let _ = body.set_position(n, [r[0] + u[0], r[1] + u[1], r[2] + u[2]]);
-            moved += 1;
-        });
-        if let Err(err) = result {
-            self.notice = Some(err.to_string());
+    /// Moves element `e` to `goal` (lattice coordinates) through the tissue's model: one ChainMail
+    /// pass, or the finite-element answer to the imposed displacement. Returns the elements moved and
+    /// the share of the move the tissue allowed.
+    fn displace(&mut self, e: ElementId, goal: [f32; 3], pass: Pass) -> (u32, f32) {
+        match &mut self.model {
+            Model::ChainMail => {
+                let Ok(d) = self.body.deform(&mut self.ws, e, goal, pass) else { return (0, 0.0) };
+                self.activate_moved();
+                (d.moved, d.fraction)
+            }
+            Model::Fem(fem) => {
+                let body = &mut self.body;
+                let r = body.lattice().rest_positions()[e.index()];
+                let d = [goal[0] - r[0], goal[1] - r[1], goal[2] - r[2]];
+                let mut moved = 0;
+                let result = fem.impose(e, d, |n, u| {
+                    let r = body.lattice().rest_positions()[n.index()];
+                    let _ = body.set_position(n, [r[0] + u[0], r[1] + u[1], r[2] + u[2]]);
+                    moved += 1;
+                });
+                if let Err(err) = result {
+                    self.notice = Some(err.to_string());
+                }
+                (moved, 1.0)
+            }
         }
-        moved
     }
 
     pub(crate) fn activate(&mut self, e: u32) {
@@ -366,23 +381,6 @@ impl Tissue {
         }
     }
 
-    /// Pulls element `e` towards a world point: the chain reaction in the surface plane, then the
-    /// normal pass (a volume runs one 3D chain reaction). Pins cut the move short.
-    pub fn pull(&mut self, e: ElementId, target: [f32; 3]) -> Pull {
-        let mut out = Pull { fraction: 1.0, ..Pull::default() };
-        for &pass in self.passes() {
-            let (moved, fraction) = self.pull_pass(e, target, pass);
-            if pass == Pass::Normal {
-                out.moved_normal = moved;
-            } else {
-                out.moved_plane = moved;
-            }
-            out.fraction = out.fraction.min(fraction);
-        }
-        out.achieved = self.world_position(e).unwrap_or(target);
-        out
-    }
-
     /// The deformation passes of this tissue, in order: `[Plane, Normal]` on a surface, `[All]` in a
     /// volume.
     pub fn passes(&self) -> &'static [Pass] {
@@ -392,17 +390,13 @@ impl Tissue {
         }
     }
 
-    /// One deformation pass of [`Tissue::pull`]: returns the elements moved and the share of the move
-    /// the tissue allowed.
+    /// One deformation pass of a pull of element `e` towards a world point (the world runs
+    /// [`Tissue::passes`] in order, timing each): returns the elements moved and the share of the move
+    /// the tissue allowed. Pins cut the move short.
     pub fn pull_pass(&mut self, e: ElementId, target: [f32; 3], pass: Pass) -> (u32, f32) {
         let Ok(p) = self.body.position(e) else { return (0, 0.0) };
         let t = self.geometry.to_lattice(target, p[0]);
-        if self.fem.is_some() {
-            return (self.fem_impose(e, t), 1.0);
-        }
-        let Ok(d) = self.body.deform(&mut self.ws, e, t, pass) else { return (0, 0.0) };
-        self.activate_moved();
-        (d.moved, d.fraction)
+        self.displace(e, t, pass)
     }
 
     /// The probe: a ball of `radius` at world point `tip` pushes the surface of the outermost layer
@@ -432,18 +426,13 @@ impl Tissue {
         }
         let mut goal = p;
         goal[axis] = limit;
-        if self.fem.is_some() {
-            return self.fem_impose(e, goal);
-        }
-        let Ok(d) = self.body.deform(&mut self.ws, e, goal, pass) else { return 0 };
-        self.activate_moved();
-        d.moved
+        self.displace(e, goal, pass).0
     }
 
     /// Relaxes the disturbed region within `budget`. The region is kept for the step's contact and
     /// tear checks, which look only there; [`Tissue::end_step`] forgets it once it has converged.
     pub fn relax(&mut self, budget: RelaxBudget) -> crate::chainmail::RelaxReport {
-        if self.active.is_empty() || self.fem.is_some() {
+        if self.active.is_empty() || self.is_fem() {
             self.settled = true;
             return crate::chainmail::RelaxReport { converged: true, ..Default::default() };
         }
@@ -512,7 +501,7 @@ impl Tissue {
     /// Breaks every link near the disturbed region stretched past its material's tear ratio (world
     /// length over rest length), counting them as torn. Also records the largest stretch seen.
     pub fn apply_tears(&mut self) -> u32 {
-        if self.fem.is_some() {
+        if self.is_fem() {
             return 0;
         }
         let mut torn = 0;
@@ -559,8 +548,7 @@ impl Tissue {
     pub fn world_stretch(&self, l: LinkId) -> f32 {
         let Some([a, b]) = self.body.lattice().link_ends(l) else { return 0.0 };
         let (Some(pa), Some(pb)) = (self.world_position(a), self.world_position(b)) else { return 0.0 };
-        let d = ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2) + (pb[2] - pa[2]).powi(2)).sqrt();
-        d / self.rest_len[l.index()].max(f32::MIN_POSITIVE)
+        Vec3::from(pb).distance(Vec3::from(pa)) / self.rest_len[l.index()].max(f32::MIN_POSITIVE)
     }
 
     /// Largest world stretch over every intact link of the given kind (or all), for reports.

@@ -238,9 +238,7 @@ impl Assessor {
         }
         let inst = world.instrument();
         if let Some(last) = self.last_tip {
-            let d = inst.target;
-            self.path_length +=
-                ((d[0] - last[0]).powi(2) + (d[1] - last[1]).powi(2) + (d[2] - last[2]).powi(2)).sqrt();
+            self.path_length += glam::Vec3::from(inst.target).distance(glam::Vec3::from(last));
         }
         self.last_tip = Some(inst.target);
         let grasping = inst.grasped.is_some();
