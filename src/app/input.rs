@@ -1,12 +1,13 @@
 //! Mouse and keyboard: camera control for every 3D view, and the trainee's hand (picking with the
-//! cursor's ray, grasping, pulling, cutting, pushing) turned into instrument [`Command`]s.
+//! cursor's ray, grasping, pulling, cutting, pushing) turned into the world's [`Command`]s.
 //!
 //! Pure input logic on glam vectors and small enums; the winit events are translated in `mod.rs`.
 
 use glam::{Vec2, Vec3};
 
-use crate::instrument::{Command, Hit, PROBE_RADIUS};
+use crate::instrument::{Hit, PROBE_RADIUS};
 use crate::render::OrbitCamera;
+use crate::simulation::Command;
 use crate::simulation::{InstrumentKind, Snapshot, World};
 use crate::tissue::CutDepth;
 use crate::ui::ToolState;

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant, SystemTime};
 
 use super::AppError;
 use crate::chainmail::{Material, MaterialId};
-use crate::instrument::{Command as InstrumentCommand, Picker};
+use crate::instrument::Picker;
 use crate::runner::{Episode, Player, Source};
 use crate::scene::{Action as ScriptAction, DEFAULT_SCENE, DEFAULT_SCENE_PATH, Recorder, Recording, Scene};
 use crate::simulation::{Command, Snapshot, World};
@@ -271,17 +271,14 @@ impl Session {
 
     /// Gathers a command for the next step (ignored while replaying). Consecutive moves collapse into
     /// the last one; a move to where the instrument already is, with nothing else pending, is dropped.
-    pub fn queue(&mut self, command: impl Into<Command>) {
-        use InstrumentCommand::MoveTo;
-        let command = command.into();
+    pub fn queue(&mut self, command: Command) {
         if !self.input_enabled() {
             return;
         }
-        if self.episode.pending().is_empty() && command == MoveTo(self.world().instrument().target).into() {
+        if self.episode.pending().is_empty() && command == Command::MoveTo(self.world().instrument().target) {
             return;
         }
-        if let (Command::Instrument(MoveTo(p)), Some(Command::Instrument(MoveTo(last)))) =
-            (&command, self.episode.last_pending_mut())
+        if let (Command::MoveTo(p), Some(Command::MoveTo(last))) = (&command, self.episode.last_pending_mut())
         {
             *last = *p;
             return;
@@ -489,11 +486,11 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("dissect-session-{}", std::process::id()));
         let rec = dir.join("r.ron");
         let mut live = Session::live(None, rec.clone()).expect("live session");
-        live.queue(InstrumentCommand::Select(crate::simulation::InstrumentKind::Scalpel));
-        live.queue(InstrumentCommand::MoveTo([0.0, 0.01, 0.0]));
-        live.queue(InstrumentCommand::MoveTo([0.001, 0.01, 0.0]));
+        live.queue(Command::Select(crate::simulation::InstrumentKind::Scalpel));
+        live.queue(Command::MoveTo([0.0, 0.01, 0.0]));
+        live.queue(Command::MoveTo([0.001, 0.01, 0.0]));
         live.advance(Duration::from_millis(5));
-        live.queue(InstrumentCommand::MoveTo([0.002, 0.01, 0.0]));
+        live.queue(Command::MoveTo([0.002, 0.01, 0.0]));
         live.advance(Duration::from_micros(100)); // no step: the command waits
         live.advance(Duration::from_millis(3));
         let steps = live.world().step_count();

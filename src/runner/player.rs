@@ -1,8 +1,7 @@
 //! The script player: timed actions in, one batch of instrument commands per step out.
 
-use crate::instrument::Command;
 use crate::scene::{Action, Point};
-use crate::simulation::Command as WorldCommand;
+use crate::simulation::Command;
 use crate::simulation::World;
 use crate::snapshot::InstrumentKind;
 
@@ -156,8 +155,8 @@ impl Player {
             Action::At(n) => self.wait_until = Some(n),
             Action::Command(c) => {
                 match &c {
-                    WorldCommand::Instrument(Command::Select(k)) => self.kind = Some(*k),
-                    WorldCommand::Instrument(Command::MoveTo(p)) => self.tip = Some(*p),
+                    Command::Select(k) => self.kind = Some(*k),
+                    Command::MoveTo(p) => self.tip = Some(*p),
                     _ => {}
                 }
                 world.push(c)

@@ -244,7 +244,7 @@ impl Script {
                 }
                 Action::Release | Action::GraspElement(_) => need(InstrumentKind::Forceps, held)?,
                 Action::Command(c) => {
-                    if let crate::simulation::Command::Instrument(crate::instrument::Command::Select(k)) = c {
+                    if let crate::simulation::Command::Select(k) = c {
                         held = Some(*k);
                     }
                 }

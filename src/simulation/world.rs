@@ -9,7 +9,7 @@ use web_time::Instant;
 
 use super::{Command, FixedClock};
 use crate::chainmail::{ElementId, RelaxBudget};
-use crate::instrument::{Command as InstrumentCommand, GRASP_REACH, Hit, Instrument, PROBE_RADIUS};
+use crate::instrument::{GRASP_REACH, Hit, Instrument, PROBE_RADIUS};
 use crate::snapshot::{InstrumentKind, Snapshot};
 use crate::tissue::{CutSegment, Tissue, TissueError, TissueSpec};
 
@@ -202,9 +202,9 @@ impl World {
         &self.commands
     }
 
-    /// Queues a command for the next step (an instrument command or a world command).
-    pub fn push(&mut self, command: impl Into<Command>) {
-        self.commands.push(command.into());
+    /// Queues a command for the next step.
+    pub fn push(&mut self, command: Command) {
+        self.commands.push(command);
     }
 
     /// The element under a picking hit (the hit's layer is the snapshot's, upper first): the element of
@@ -297,19 +297,6 @@ impl World {
 
     fn apply(&mut self, command: Command) {
         match command {
-            Command::Instrument(c) => self.apply_instrument(c),
-            Command::SetMaterial(id, m) => {
-                if let Err(e) = self.tissue.body_mut().set_material(id, m) {
-                    self.tissue.notice = Some(format!("material refused: {e}"));
-                }
-            }
-            Command::SetRelaxSweeps(n) => self.config.relax.max_sweeps = n,
-        }
-    }
-
-    fn apply_instrument(&mut self, command: InstrumentCommand) {
-        use InstrumentCommand as Command;
-        match command {
             Command::Select(kind) => {
                 // What the forceps hold stays clamped while another instrument is in use (two-handed
                 // teasing apart); taking the forceps back takes up the grasp where it is.
@@ -373,6 +360,12 @@ impl World {
                     self.instrument.roll = r;
                 }
             }
+            Command::SetMaterial(id, m) => {
+                if let Err(e) = self.tissue.body_mut().set_material(id, m) {
+                    self.tissue.notice = Some(format!("material refused: {e}"));
+                }
+            }
+            Command::SetRelaxSweeps(n) => self.config.relax.max_sweeps = n,
             Command::SetAxis(a) => {
                 let a = Vec3::from(a);
                 let l = a.length();
