@@ -1,4 +1,4 @@
-//! The exercise itself: the default meninges scene at a given resolution, played with the careful
+//! The exercise itself: the meninges scene at a given resolution, played with the careful
 //! script (`scenes/scripts/meninges_careful.ron`) step by step, as a trainee's session runs it.
 //!
 //! Criterion reports the mean step; p50 and p99 of the steps timed are printed after each bench
@@ -12,10 +12,11 @@ use dissect::runner::{Player, TimeStats};
 use dissect::scene::{Scene, Script, Tissue as SceneTissue};
 use dissect::simulation::World;
 
+const MENINGES: &str = include_str!("../scenes/meninges.ron");
 const CAREFUL: &str = include_str!("../scenes/scripts/meninges_careful.ron");
 
 fn scene_at(nu: u32, nv: u32) -> Scene {
-    let mut scene = Scene::default_scene().expect("default scene");
+    let mut scene = Scene::from_str(MENINGES, "scenes/meninges.ron").expect("meninges scene");
     if let SceneTissue::Layers(l) = &mut scene.tissue {
         l.resolution = [nu, nv];
     }

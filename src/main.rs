@@ -20,7 +20,7 @@ use dissect::scene::{Scene, Script};
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
-    /// The scene to open (RON); default: the built-in meninges exercise. A scene file is watched and
+    /// The scene to open (RON); default: the built-in dural incision and reflection exercise. A scene file is watched and
     /// reloaded when it changes.
     #[arg(value_name = "SCENE")]
     scene: Option<PathBuf>,

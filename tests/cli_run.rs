@@ -29,7 +29,7 @@ fn run(scene: &str, out: &Path, steps: Option<u64>) -> std::process::Output {
 #[test]
 fn bundled_scenes_run_and_repeat_bit_for_bit() {
     let tmp = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_run");
-    for scene in ["meninges", "cylinder", "sphere", "volume", "fem_block"] {
+    for scene in ["durotomy", "meninges", "cylinder", "sphere", "volume", "fem_block"] {
         let (a, b) = (tmp.join(format!("{scene}_a")), tmp.join(format!("{scene}_b")));
         for dir in [&a, &b] {
             let out = run(scene, dir, Some(600));

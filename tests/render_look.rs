@@ -13,9 +13,9 @@ use dissect::render::{self, Gpu, Offscreen, OrbitCamera, SceneRenderer, Style};
 use dissect::scene::{Scene, Script};
 use dissect::simulation::Snapshot;
 
-/// The default exercise and its careful script.
-const SCENE: &str = "scenes/meninges.ron";
-const SCRIPT: &str = "scenes/scripts/meninges_careful.ron";
+/// The default exercise (the dural flap) and its careful script.
+const SCENE: &str = "scenes/durotomy.ron";
+const SCRIPT: &str = "scenes/scripts/durotomy_careful.ron";
 
 const WIDTH: u32 = 640;
 const HEIGHT: u32 = 400;

@@ -55,12 +55,15 @@ fn every_bundled_script_loads_and_fits_its_scene() {
 
 #[test]
 fn embedded_default_is_the_file() {
-    let on_disk = std::fs::read_to_string(scenes_dir().join("meninges.ron")).expect("read");
+    let on_disk = std::fs::read_to_string(scenes_dir().join("durotomy.ron")).expect("read");
     assert_eq!(DEFAULT_SCENE, on_disk);
     let scene = Scene::default_scene().unwrap_or_else(|e| panic!("{e}"));
-    let Tissue::Layers(l) = &scene.tissue else { panic!("meninges has layers") };
+    let Tissue::Layers(l) = &scene.tissue else { panic!("the dural flap has layers") };
     assert_eq!(l.layers.len(), 2);
     assert!(l.connective.is_some());
+    let goals = scene.goals.as_ref().expect("the default exercise has goals");
+    assert!(goals.incision.len() >= 4, "a U-shaped incision");
+    assert!(!goals.steps.is_empty(), "a checklist");
 }
 
 #[test]
@@ -90,6 +93,9 @@ fn readme_examples_load() {
     dissect::scene::Recording::from_str(&blocks[2], "README.md").unwrap_or_else(|e| panic!("{e}"));
     Scene::from_str(&blocks[0], "README.md").unwrap_or_else(|e| panic!("{e}"));
     let script = Script::from_str(&blocks[1], "README.md").unwrap_or_else(|e| panic!("{e}"));
-    let meninges = Scene::default_scene().unwrap_or_else(|e| panic!("{e}"));
-    script.check_against(&meninges).unwrap_or_else(|e| panic!("{e}"));
+    let default = Scene::default_scene().unwrap_or_else(|e| panic!("{e}"));
+    script.check_against(&default).unwrap_or_else(|e| panic!("{e}"));
+    // The example is the default scene's script, as the README says.
+    let file = Script::load(scenes_dir().join("scripts/durotomy.ron")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(script, file, "the README's example is scripts/durotomy.ron");
 }

@@ -1,4 +1,4 @@
-//! Limits hold: on the default meninges exercise (coarsened to keep the test quick), random sessions of
+//! Limits hold: on the meninges exercise (coarsened to keep the test quick), random sessions of
 //! grasps, lifts, pushes and cuts never leave an intact link outside its material's limits after a
 //! step. Links that go past their tear ratio break (and are counted as torn); every other link stays in
 //! its constraint box, up to rounding.
@@ -14,7 +14,8 @@ use proptest::prelude::*;
 const SLACK: f32 = 1e-4;
 
 fn world(nu: u32, nv: u32) -> World {
-    let mut scene = Scene::default_scene().expect("default scene");
+    let mut scene =
+        Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meninges.ron")).expect("meninges scene");
     if let SceneTissue::Layers(l) = &mut scene.tissue {
         l.resolution = [nu, nv];
     }

@@ -11,12 +11,11 @@ use dissect::training::{Assessor, Goals, Region};
 
 fn goals() -> Goals {
     Goals {
-        target: Region::Rect { u: (0.3, 0.7), v: (0.3, 0.7) },
         forbidden: vec![Region::Rect { u: (0.0, 1.0), v: (0.85, 1.0) }],
         stretch_limit: 1.6,
         separation: 0.003,
         time_limit_s: Some(30.0),
-        force_limit: dissect::training::DEFAULT_FORCE_LIMIT,
+        ..Goals::new(Region::Rect { u: (0.3, 0.7), v: (0.3, 0.7) })
     }
 }
 

@@ -96,22 +96,16 @@ pub struct Session {
     dropped: bool,
 }
 
+/// Now, UTC, as `2026-11-22_05-30-12` (names of recordings and screenshots).
+pub fn date_time_stem() -> String {
+    let secs = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0);
+    let (year, month, day, h, m, s) = crate::training::utc_date_time(secs);
+    format!("{year:04}-{month:02}-{day:02}_{h:02}-{m:02}-{s:02}")
+}
+
 /// `recordings/2026-11-22_05-30-12.ron` under the current folder (a counter is added if it exists).
 pub fn default_recording_path() -> PathBuf {
-    let secs = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0);
-    let (days, rem) = ((secs / 86_400) as i64, secs % 86_400);
-    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    let stem =
-        format!("{year:04}-{month:02}-{day:02}_{:02}-{:02}-{:02}", rem / 3600, (rem / 60) % 60, rem % 60);
+    let stem = date_time_stem();
     let dir = PathBuf::from("recordings");
     let mut path = dir.join(format!("{stem}.ron"));
     let mut n = 2;
@@ -459,14 +453,10 @@ impl Session {
         let base = self.recording_path().unwrap_or_else(|| PathBuf::from("session.ron"));
         let json = base.with_extension("report.json");
         let png = base.with_extension("report.png");
-        let result = crate::training::write_report(&json, &assessment, assessor.history()).and_then(|()| {
-            crate::training::write_plot(
-                &png,
-                assessor.history(),
-                assessor.goals().stretch_limit,
-                assessor.goals().force_limit,
-            )
-        });
+        let report =
+            assessor.report(self.episode.world(), &self.scene.title, crate::training::utc_now_string());
+        let result = crate::training::write_report(&json, &report)
+            .and_then(|()| crate::training::write_plot(&png, &report));
         match result {
             Ok(()) => {
                 println!("dissect: report written to {} and {}", json.display(), png.display());

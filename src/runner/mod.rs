@@ -222,6 +222,8 @@ pub struct RunOutput {
     pub assessor: Option<crate::training::Assessor>,
     /// The recording of the run's commands, when one was asked for (to be finished by the caller).
     pub recorder: Option<crate::scene::Recorder>,
+    /// The scene's title (for the report).
+    pub title: String,
 }
 
 /// Runs `script` on `scene` without a window: `steps` steps, or until the script ends. Deterministic:
@@ -257,7 +259,7 @@ pub fn run(
     let (world, assessor, recorder) = episode.into_parts();
     let mut metrics = figures.metrics(&world);
     metrics.assessment = assessor.as_ref().map(|a| a.assessment(&world));
-    Ok(RunOutput { world, metrics, assessor, recorder })
+    Ok(RunOutput { world, metrics, assessor, recorder, title: scene.title.clone() })
 }
 
 /// Writes `metrics.json`, `state.json` and, with goals, `report.json` and `report.png` into `dir`.
@@ -275,12 +277,11 @@ pub fn write_outputs(dir: &std::path::Path, out: &RunOutput) -> Result<(), RunEr
     let text = serde_json::to_string(&state).map_err(|e| werr(&path, &e))?;
     std::fs::write(&path, text).map_err(|e| werr(&path, &e))?;
     if let Some(a) = &out.assessor {
-        let assessment = a.assessment(&out.world);
+        let report = a.report(&out.world, &out.title, crate::training::utc_now_string());
         let path = dir.join("report.json");
-        crate::training::write_report(&path, &assessment, a.history()).map_err(|e| werr(&path, &e))?;
+        crate::training::write_report(&path, &report).map_err(|e| werr(&path, &e))?;
         let path = dir.join("report.png");
-        crate::training::write_plot(&path, a.history(), a.goals().stretch_limit, a.goals().force_limit)
-            .map_err(|e| werr(&path, &e))?;
+        crate::training::write_plot(&path, &report).map_err(|e| werr(&path, &e))?;
     }
     Ok(())
 }

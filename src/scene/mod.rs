@@ -33,11 +33,12 @@ pub use types::{
 };
 pub use validate::{MAX_METRES, MAX_SCENE_ELEMENTS, MIN_SPACING};
 
-/// The default exercise (`scenes/meninges.ron`), built into the binary.
-pub const DEFAULT_SCENE: &str = include_str!("../../scenes/meninges.ron");
+/// The default exercise (`scenes/durotomy.ron`, the dural incision and reflection), built into the
+/// binary.
+pub const DEFAULT_SCENE: &str = include_str!("../../scenes/durotomy.ron");
 
 /// Name under which [`DEFAULT_SCENE`] reports errors.
-pub const DEFAULT_SCENE_PATH: &str = "scenes/meninges.ron";
+pub const DEFAULT_SCENE_PATH: &str = "scenes/durotomy.ron";
 
 /// The RON options every scene and script is read with: `Some(..)` may be left out
 /// (`tear_ratio: 1.9` means `Some(1.9)`).

@@ -3,6 +3,7 @@
 
 use crate::chainmail::{Limits, Material};
 use crate::snapshot::CameraSpec;
+use crate::training::StepCheck;
 
 use super::error::{FieldPath, Problem, problem};
 use super::types::{
@@ -66,6 +67,55 @@ fn goals(g: &crate::training::Goals, at: &FieldPath) -> Result<(), Problem> {
         && !(t.is_finite() && t > 0.0)
     {
         return problem(&at.f("time_limit_s"), format!("is {t}, expected a positive number of seconds"));
+    }
+    if !(g.path_reference_m.is_finite() && g.path_reference_m > 0.0) {
+        return problem(
+            &at.f("path_reference_m"),
+            format!("is {}, expected a positive number of metres", g.path_reference_m),
+        );
+    }
+    if g.incision.len() == 1 {
+        return problem(&at.f("incision"), "has one point, expected at least two (a line) or none");
+    }
+    for (i, &(u, v)) in g.incision.iter().enumerate() {
+        for (j, x) in [u, v].into_iter().enumerate() {
+            if !(x.is_finite() && (0.0..=1.0).contains(&x)) {
+                return problem(
+                    &at.f("incision").i(i).i(j),
+                    format!("is {x}, expected a fraction in [0, 1]"),
+                );
+            }
+        }
+    }
+    let pass = at.f("pass");
+    if !(g.pass.score.is_finite() && (0.0..=100.0).contains(&g.pass.score)) {
+        return problem(&pass.f("score"), format!("is {}, expected a score from 0 to 100", g.pass.score));
+    }
+    if !(g.pass.completion.is_finite() && (0.0..=1.0).contains(&g.pass.completion)) {
+        return problem(
+            &pass.f("completion"),
+            format!("is {}, expected a share from 0 to 1", g.pass.completion),
+        );
+    }
+    for (i, step) in g.steps.iter().enumerate() {
+        let at = at.f("steps").i(i);
+        if step.text.trim().is_empty() {
+            return problem(&at.f("text"), "is empty, expected what the trainee does in this step");
+        }
+        let done = at.f("done");
+        match step.done {
+            StepCheck::Grasp => {}
+            StepCheck::Incision(x) | StepCheck::Fibres(x) if !(x.is_finite() && x > 0.0 && x <= 1.0) => {
+                return problem(&done.inner(), format!("is {x}, expected a share above 0 and at most 1"));
+            }
+            StepCheck::Incision(_) if g.incision.is_empty() => {
+                return problem(&done, "is Incision, but the goals have no `incision` line to measure it on");
+            }
+            StepCheck::Separation(x) if !(x.is_finite() && x > 0.0) => {
+                return problem(&done.inner(), format!("is {x}, expected a positive number of metres"));
+            }
+            _ => {}
+        }
     }
     Ok(())
 }

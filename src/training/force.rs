@@ -193,11 +193,16 @@ pub(crate) fn elements_in(tissue: &Tissue, contains: impl Fn(f32, f32) -> bool) 
         .collect()
 }
 
-/// Draws the force on the instrument over time against the limit (the lower part of `report.png`).
+/// The force's colour in `report.png`.
+pub(crate) const FORCE_COLOUR: plotters::style::RGBColor = plotters::style::RGBColor(30, 140, 60);
+
+/// Draws the force on the instrument over time against the limit, dashed in `limit_colour` (the lower
+/// part of `report.png`; its legend is drawn with the upper chart's, under both).
 pub(crate) fn draw_force<DB: plotters::prelude::DrawingBackend>(
     area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
     history: &[super::Sample],
     limit: f32,
+    limit_colour: plotters::style::RGBColor,
 ) -> Result<(), String> {
     use plotters::prelude::*;
     let e = |e: &dyn std::fmt::Display| e.to_string();
@@ -213,27 +218,21 @@ pub(crate) fn draw_force<DB: plotters::prelude::DrawingBackend>(
         .map_err(|x| e(&x))?;
     chart
         .configure_mesh()
-        .x_desc("time (s)")
+        .x_desc("time since the first instrument action (s)")
         .y_desc("force (N)")
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(|x| e(&x))?;
     chart
-        .draw_series(LineSeries::new(history.iter().map(|s| (s.t, s.force_n)), GREEN.stroke_width(2)))
-        .map_err(|x| e(&x))?
-        .label("force")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], GREEN));
+        .draw_series(DashedLineSeries::new(
+            [(0.0, limit), (t_max, limit)],
+            8,
+            5,
+            limit_colour.stroke_width(2),
+        ))
+        .map_err(|x| e(&x))?;
     chart
-        .draw_series(LineSeries::new([(0.0, limit), (t_max, limit)], BLACK.mix(0.4)))
-        .map_err(|x| e(&x))?
-        .label("force limit")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.mix(0.4)));
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()
+        .draw_series(LineSeries::new(history.iter().map(|s| (s.t, s.force_n)), FORCE_COLOUR.stroke_width(2)))
         .map_err(|x| e(&x))?;
     Ok(())
 }

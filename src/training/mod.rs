@@ -4,127 +4,24 @@
 //!
 //! Must not import wgpu, winit or egui.
 
+mod coach;
 mod force;
+mod goals;
 mod report;
 
+pub use coach::{Advice, AdviceLevel};
 pub use force::{ForceAssessment, ForceStats, InstrumentForce};
-pub use report::{ReportError, report_json, write_plot, write_report};
+pub use goals::{DEFAULT_FORCE_LIMIT, Goals, PassMark, Region, Step, StepCheck};
+pub use report::{
+    REPORT_SAMPLES, Report, ReportError, report_json, utc_date_time, utc_now_string, write_plot, write_report,
+};
 
+use glam::Vec2;
 use serde::{Deserialize, Serialize};
 
-use crate::chainmail::LinkId;
-use crate::simulation::World;
-use crate::snapshot::{RegionKind, RegionShape, SurfaceRegion};
+use crate::chainmail::{BreakReason, LinkId};
+use crate::simulation::{InstrumentKind, World};
 use crate::tissue::{LinkKind, Tissue};
-
-/// A region of the tissue's surface, in fractions of the `u` and `v` extents (`0` to `1`).
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub enum Region {
-    /// A rectangle: `u` from `u.0` to `u.1`, `v` from `v.0` to `v.1`.
-    Rect {
-        /// Range of `u`, fractions.
-        u: (f32, f32),
-        /// Range of `v`, fractions.
-        v: (f32, f32),
-    },
-    /// A disc around `center` of `radius`, all in fractions.
-    Disc {
-        /// Centre `(u, v)`, fractions.
-        center: (f32, f32),
-        /// Radius, a fraction.
-        radius: f32,
-    },
-}
-
-impl Region {
-    /// Whether the point `(u, v)` (fractions) lies in the region.
-    pub fn contains(&self, u: f32, v: f32) -> bool {
-        match *self {
-            Region::Rect { u: (u0, u1), v: (v0, v1) } => u >= u0 && u <= u1 && v >= v0 && v <= v1,
-            Region::Disc { center: (cu, cv), radius } => {
-                (u - cu).powi(2) + (v - cv).powi(2) <= radius * radius
-            }
-        }
-    }
-
-    /// The same region as the snapshot carries it for drawing.
-    pub fn shape(&self) -> RegionShape {
-        match *self {
-            Region::Rect { u, v } => RegionShape::Rect { u: [u.0, u.1], v: [v.0, v.1] },
-            Region::Disc { center, radius } => RegionShape::Disc { center: [center.0, center.1], radius },
-        }
-    }
-
-    /// Checks that the numbers are finite fractions.
-    pub fn validate(&self) -> Result<(), String> {
-        let nums: Vec<f32> = match *self {
-            Region::Rect { u, v } => vec![u.0, u.1, v.0, v.1],
-            Region::Disc { center, radius } => vec![center.0, center.1, radius],
-        };
-        if nums.iter().any(|x| !x.is_finite() || *x < 0.0 || *x > 1.0) {
-            return Err("expected fractions between 0 and 1".into());
-        }
-        if let Region::Rect { u, v } = *self
-            && (u.0 >= u.1 || v.0 >= v.1)
-        {
-            return Err("expected each range's start below its end".into());
-        }
-        Ok(())
-    }
-}
-
-/// What the exercise asks of the trainee.
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct Goals {
-    /// The region whose connective fibres must be cut so that the layers separate there.
-    pub target: Region,
-    /// Regions where nothing may be cut or torn. Default: none.
-    #[serde(default)]
-    pub forbidden: Vec<Region>,
-    /// Stretch (world length over rest length) above which the tissue is hurt. Default 1.6.
-    #[serde(default = "default_stretch_limit")]
-    pub stretch_limit: f32,
-    /// Mean separation of the layers over the target that counts as separated, metres. Default 0.004.
-    #[serde(default = "default_separation")]
-    pub separation: f32,
-    /// Time allowed, seconds. Default: none.
-    #[serde(default)]
-    pub time_limit_s: Option<f32>,
-    /// Force on an instrument above which the tissue is handled too roughly, newtons. Default
-    /// [`DEFAULT_FORCE_LIMIT`].
-    #[serde(default = "default_force_limit")]
-    pub force_limit: f32,
-}
-
-/// Default force limit, newtons.
-pub const DEFAULT_FORCE_LIMIT: f32 = 1.0;
-
-fn default_force_limit() -> f32 {
-    DEFAULT_FORCE_LIMIT
-}
-
-impl Goals {
-    /// The target and the forbidden regions, to be drawn on the tissue.
-    pub fn surface_regions(&self) -> Vec<SurfaceRegion> {
-        std::iter::once(SurfaceRegion { kind: RegionKind::Target, shape: self.target.shape() })
-            .chain(
-                self.forbidden
-                    .iter()
-                    .map(|r| SurfaceRegion { kind: RegionKind::Forbidden, shape: r.shape() }),
-            )
-            .collect()
-    }
-}
-
-fn default_stretch_limit() -> f32 {
-    1.6
-}
-
-fn default_separation() -> f32 {
-    0.004
-}
 
 /// One line of the score's breakdown.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -138,15 +35,26 @@ pub struct ScoreItem {
 /// How the trainee is doing, every figure of the report.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
 pub struct Assessment {
-    /// Share of the target's connective links cut, `0` to `1`.
+    /// The score, higher is better (0 to 100).
+    pub score: f32,
+    /// Whether the session passes the goals' pass mark so far.
+    pub passed: bool,
+    /// The two things to improve most (or a word that nothing is), plain sentences.
+    pub feedback: Vec<String>,
+    /// Share of the task done, `0` to `1`: the target's fibres cut, averaged with the planned incision's
+    /// share cut when the exercise has one.
     pub completion: f32,
+    /// Share of the planned incision cut, `0` to `1` (`None` when the exercise has no incision).
+    pub incision: Option<f32>,
+    /// Share of the target's connective links cut, `0` to `1`.
+    pub fibres: f32,
     /// Connective links in the target.
     pub target_links: u32,
     /// Of those, cut.
     pub target_links_cut: u32,
     /// Mean separation of the layers over the target beyond their rest gap, metres.
     pub separation_m: f32,
-    /// In-layer links cut (incisions in a layer): collateral damage.
+    /// In-layer links cut away from the planned incision: collateral damage.
     pub layer_links_cut: u64,
     /// Connective links cut outside the target: collateral damage.
     pub connective_cut_outside: u32,
@@ -154,20 +62,22 @@ pub struct Assessment {
     pub forbidden_links_broken: u32,
     /// Links torn by over-stretching.
     pub links_torn: u64,
-    /// Highest stretch seen (the force proxy).
+    /// Highest stretch seen since the clock started (the force proxy).
     pub peak_stretch: f32,
     /// Time spent with the stretch above the limit, seconds.
     pub time_above_limit_s: f32,
-    /// Time since the start, seconds of simulation.
+    /// Time since the first instrument action, seconds of simulation (0 until then).
     pub elapsed_s: f32,
+    /// Whether the clock has started (the first grasp, cut or push).
+    pub started: bool,
     /// Whether the time limit has passed.
     pub over_time: bool,
-    /// Distance the instrument tip travelled, metres.
+    /// Distance the instrument tip travelled since the clock started, metres.
     pub path_length_m: f32,
     /// Number of grasps.
     pub grasps: u32,
-    /// The score, higher is better (0 to 100).
-    pub score: f32,
+    /// Which of the goals' steps are done, in order.
+    pub steps_done: Vec<bool>,
     /// How the score was made.
     pub breakdown: Vec<ScoreItem>,
     /// Forces on the instruments and on the forbidden region.
@@ -177,21 +87,66 @@ pub struct Assessment {
 /// A point of the session's history, for the report's plot.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
 pub struct Sample {
-    /// Seconds of simulation.
+    /// Seconds since the clock started.
     pub t: f32,
     /// Completion then.
     pub completion: f32,
-    /// Stretch then.
+    /// The highest stretch since the sample before (so the plot's peak is the assessment's).
     pub stretch: f32,
     /// Force on the instrument in hand (or the clamp) then, newtons.
     #[serde(default)]
     pub force_n: f32,
 }
 
-/// Reference path length for the economy score, metres: a careful session needs about this much.
-const REFERENCE_PATH_M: f32 = 0.3;
 /// History is sampled every this many seconds.
 const SAMPLE_EVERY_S: f32 = 0.01;
+/// Upper-layer links cut within this many element spacings of the planned incision are the task, not
+/// damage (a hand does not follow a line exactly).
+const INCISION_ALLOWANCE: f32 = 1.5;
+/// A point of the planned incision counts as cut when an upper-layer link within this many spacings
+/// of it is cut.
+const INCISION_REACH: f32 = 1.0;
+/// The planned incision is checked at points this many spacings apart.
+const INCISION_STEP: f32 = 0.5;
+
+/// The linear map from lattice coordinates to surface fractions, and back.
+#[derive(Clone, Copy, Debug)]
+struct Fractions {
+    /// Lattice coordinates of fraction (0, 0).
+    lo: Vec2,
+    /// Metres per unit fraction along u and v.
+    span: Vec2,
+    /// Index of the lattice coordinate that `v` runs along (1 on a surface, 2 in a volume).
+    kv: usize,
+}
+
+impl Fractions {
+    fn of(tissue: &Tissue) -> Self {
+        let f0 = tissue.surface_fractions([0.0; 3]);
+        let f1 = tissue.surface_fractions([1.0; 3]);
+        let kv = if tissue.surface_fractions([0.0, 1.0, 0.0]).1 != f0.1 { 1 } else { 2 };
+        let span = Vec2::new(1.0 / (f1.0 - f0.0), 1.0 / (f1.1 - f0.1));
+        Self { lo: -Vec2::new(f0.0, f0.1) * span, span, kv }
+    }
+
+    /// Lattice (u, v) coordinates, metres, of a fraction pair.
+    fn lattice(&self, (u, v): (f32, f32)) -> Vec2 {
+        self.lo + Vec2::new(u, v) * self.span
+    }
+
+    /// The in-surface part of a lattice point, metres.
+    fn plane(&self, p: [f32; 3]) -> Vec2 {
+        Vec2::new(p[0], p[self.kv])
+    }
+}
+
+/// Distance from `p` to the segment from `a` to `b`.
+fn point_segment_dist(p: Vec2, a: Vec2, b: Vec2) -> f32 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    let t = if len2 > 0.0 { ((p - a).dot(ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    p.distance(a + t * ab)
+}
 
 /// Watches a world step by step and assesses it against the goals.
 #[derive(Clone, Debug)]
@@ -204,11 +159,21 @@ pub struct Assessor {
     target_pairs: Vec<(u32, u32)>,
     /// Connective links outside the target.
     outside: Vec<LinkId>,
+    /// Every connective link with its (lower, upper) elements, for the coach.
+    connective: Vec<(LinkId, u32, u32)>,
     /// Links (any kind) in a forbidden region.
     forbidden: Vec<LinkId>,
+    /// In-layer links whose cutting is damage (all but the upper layer's along the planned incision).
+    penalised: Vec<LinkId>,
+    /// For each point of the planned incision, the upper-layer links whose cut counts for it.
+    incision: Vec<Vec<LinkId>>,
     rest_gap: f32,
+    /// Steps observed.
     steps: u64,
+    /// The step (of those observed) at which the clock started.
+    started_at: Option<u64>,
     peak_stretch: f32,
+    interval_peak: f32,
     steps_above: u64,
     path_length: f32,
     last_tip: Option<[f32; 3]>,
@@ -217,6 +182,10 @@ pub struct Assessor {
     history: Vec<Sample>,
     next_sample: f32,
     force: force::ForceMeter,
+    steps_done: Vec<bool>,
+    torn_seen: u64,
+    /// When links last tore (steps observed) and how many.
+    last_tear: Option<(u64, u64)>,
 }
 
 impl Assessor {
@@ -224,7 +193,26 @@ impl Assessor {
     pub fn new(goals: Goals, world: &World) -> Self {
         let tissue = world.tissue();
         let rest = tissue.body().lattice().rest_positions();
+        let frac = Fractions::of(tissue);
+        let spacing = tissue.spacing();
+        let line: Vec<Vec2> = goals.incision.iter().map(|&p| frac.lattice(p)).collect();
+        let mut points = Vec::new();
+        for w in line.windows(2) {
+            let len = w[0].distance(w[1]);
+            let n = ((len / (INCISION_STEP * spacing)).ceil() as usize).max(1);
+            for k in 0..n {
+                let t = k as f32 / n as f32;
+                points.push(w[0].lerp(w[1], t));
+            }
+        }
+        if let Some(&last) = line.last() {
+            points.push(last);
+        }
+        let mut incision = vec![Vec::new(); points.len()];
+        // Layers count from the upper one.
+        let upper = LinkKind::Layer(0);
         let (mut target, mut outside, mut forbidden, mut target_pairs) = (vec![], vec![], vec![], vec![]);
+        let (mut penalised, mut connective) = (vec![], vec![]);
         let mut rest_gap = 0.0;
         for l in 0..tissue.body().link_count() {
             let id = LinkId(l as u32);
@@ -235,30 +223,57 @@ impl Assessor {
             if goals.forbidden.iter().any(|r| r.contains(u, v)) {
                 forbidden.push(id);
             }
-            if tissue.link_kind(id) == Some(LinkKind::Connective) {
-                if goals.target.contains(u, v) {
-                    target.push(id);
-                    target_pairs.push((a.0, b.0));
-                    rest_gap = (pb[2] - pa[2]).abs();
-                } else {
-                    outside.push(id);
+            match tissue.link_kind(id) {
+                Some(LinkKind::Connective) => {
+                    connective.push((id, a.0, b.0));
+                    if goals.target.contains(u, v) {
+                        target.push(id);
+                        target_pairs.push((a.0, b.0));
+                        rest_gap = (pb[2] - pa[2]).abs();
+                    } else {
+                        outside.push(id);
+                    }
                 }
+                Some(kind) => {
+                    let m = frac.plane(mid);
+                    let near = kind == upper
+                        && line
+                            .windows(2)
+                            .any(|w| point_segment_dist(m, w[0], w[1]) <= INCISION_ALLOWANCE * spacing);
+                    if !near {
+                        penalised.push(id);
+                    }
+                    if kind == upper {
+                        for (k, p) in points.iter().enumerate() {
+                            if m.distance_squared(*p) <= (INCISION_REACH * spacing).powi(2) {
+                                incision[k].push(id);
+                            }
+                        }
+                    }
+                }
+                None => {}
             }
         }
         let tissue = world.tissue();
         let in_forbidden =
             force::elements_in(tissue, |u, v| goals.forbidden.iter().any(|r| r.contains(u, v)));
         let force = force::ForceMeter::new(goals.force_limit, world.step_seconds() as f32, in_forbidden);
+        let steps_done = vec![false; goals.steps.len()];
         Self {
             goals,
             dt: world.step_seconds() as f32,
             target,
             target_pairs,
             outside,
+            connective,
             forbidden,
+            penalised,
+            incision,
             rest_gap,
             steps: 0,
+            started_at: None,
             peak_stretch: 1.0,
+            interval_peak: 1.0,
             steps_above: 0,
             path_length: 0.0,
             last_tip: None,
@@ -267,6 +282,9 @@ impl Assessor {
             history: Vec::new(),
             next_sample: 0.0,
             force,
+            steps_done,
+            torn_seen: 0,
+            last_tear: None,
         }
     }
 
@@ -275,15 +293,33 @@ impl Assessor {
         &self.goals
     }
 
+    /// Seconds since the clock started (0 until the first instrument action).
+    pub fn elapsed_s(&self) -> f32 {
+        self.started_at.map_or(0.0, |s| (self.steps - s) as f32 * self.dt)
+    }
+
+    /// Whether the clock has started: the first grasp, cut or push.
+    pub fn started(&self) -> bool {
+        self.started_at.is_some()
+    }
+
     /// Call after every step.
     pub fn observe(&mut self, world: &World) {
         self.steps += 1;
+        let inst = world.instrument();
+        if self.started_at.is_none() {
+            let pushing = inst.kind == InstrumentKind::Probe && world.last_step().moved_chain > 0;
+            if inst.grasped.is_none() && !inst.cutting && !pushing {
+                return;
+            }
+            self.started_at = Some(self.steps - 1);
+        }
         let stretch = world.tissue().max_stretch();
         self.peak_stretch = self.peak_stretch.max(stretch);
+        self.interval_peak = self.interval_peak.max(stretch);
         if stretch > self.goals.stretch_limit {
             self.steps_above += 1;
         }
-        let inst = world.instrument();
         if let Some(last) = self.last_tip {
             self.path_length += glam::Vec3::from(inst.target).distance(glam::Vec3::from(last));
         }
@@ -294,69 +330,126 @@ impl Assessor {
         }
         self.grasping = grasping;
         self.force.observe(world);
-        let t = self.steps as f32 * self.dt;
+        let torn = world.tissue().damage().links_torn;
+        if torn > self.torn_seen {
+            let before =
+                self.last_tear.filter(|(s, _)| self.steps - s < self.coach_window()).map_or(0, |t| t.1);
+            self.last_tear = Some((self.steps, before + torn - self.torn_seen));
+            self.torn_seen = torn;
+        }
+        let t = self.elapsed_s();
         if t >= self.next_sample {
             self.next_sample = t + SAMPLE_EVERY_S;
-            let completion = self.completion(world.tissue()).0;
-            self.history.push(Sample { t, completion, stretch, force_n: self.force.last() });
+            let (completion, _, _, _) = self.completion(world.tissue());
+            self.history.push(Sample {
+                t,
+                completion,
+                stretch: self.interval_peak,
+                force_n: self.force.last(),
+            });
+            self.interval_peak = 1.0;
+            if self.steps_done.iter().any(|d| !d) {
+                let separation = self.separation(world.tissue());
+                for (k, step) in self.goals.steps.iter().enumerate() {
+                    if self.steps_done[k] {
+                        continue;
+                    }
+                    self.steps_done[k] = match step.done {
+                        StepCheck::Grasp => self.grasps > 0,
+                        StepCheck::Incision(x) => self.incision_share(world.tissue()).is_some_and(|s| s >= x),
+                        StepCheck::Fibres(x) => self.fibre_share(world.tissue()).0 >= x,
+                        StepCheck::Separation(x) => separation >= x,
+                    };
+                }
+            }
         }
     }
 
-    fn completion(&self, tissue: &Tissue) -> (f32, u32) {
+    /// Steps within which tears are reported together by the coach (3 seconds).
+    fn coach_window(&self) -> u64 {
+        (3.0 / self.dt) as u64
+    }
+
+    fn fibre_share(&self, tissue: &Tissue) -> (f32, u32) {
         let cut = self.target.iter().filter(|&&l| !tissue.body().link_intact(l)).count() as u32;
         let share = if self.target.is_empty() { 0.0 } else { cut as f32 / self.target.len() as f32 };
         (share, cut)
     }
 
-    /// The history so far (one sample per 10 ms of simulation).
+    fn incision_share(&self, tissue: &Tissue) -> Option<f32> {
+        if self.incision.is_empty() {
+            return None;
+        }
+        let body = tissue.body();
+        let cut = self
+            .incision
+            .iter()
+            .filter(|links| links.iter().any(|&l| body.link_broken(l) == Some(BreakReason::Cut)))
+            .count();
+        Some(cut as f32 / self.incision.len() as f32)
+    }
+
+    /// (completion, incision share, fibre share, target fibres cut).
+    fn completion(&self, tissue: &Tissue) -> (f32, Option<f32>, f32, u32) {
+        let (fibres, cut) = self.fibre_share(tissue);
+        let incision = self.incision_share(tissue);
+        let completion = incision.map_or(fibres, |i| 0.5 * (i + fibres));
+        (completion, incision, fibres, cut)
+    }
+
+    fn separation(&self, tissue: &Tissue) -> f32 {
+        if self.target_pairs.is_empty() {
+            return 0.0;
+        }
+        let p = tissue.body().positions();
+        let sum: f32 =
+            self.target_pairs.iter().map(|&(a, b)| p[b as usize][2] - p[a as usize][2] - self.rest_gap).sum();
+        sum / self.target_pairs.len() as f32
+    }
+
+    /// The history so far (one sample per 10 ms of simulation since the clock started).
     pub fn history(&self) -> &[Sample] {
         &self.history
     }
 
-    /// Every figure, and the score with its breakdown.
+    /// Every figure, the score with its breakdown, pass or fail, and the feedback.
     pub fn assessment(&self, world: &World) -> Assessment {
         let tissue = world.tissue();
-        let (completion, cut) = self.completion(tissue);
+        let (completion, incision, fibres, cut) = self.completion(tissue);
         let body = tissue.body();
-        let separation = if self.target_pairs.is_empty() {
-            0.0
-        } else {
-            let sum: f32 = self
-                .target_pairs
-                .iter()
-                .map(|&(a, b)| {
-                    body.positions()[b as usize][2] - body.positions()[a as usize][2] - self.rest_gap
-                })
-                .sum();
-            sum / self.target_pairs.len() as f32
-        };
+        let separation = self.separation(tissue);
         let damage = tissue.damage();
+        let layer_cut =
+            self.penalised.iter().filter(|&&l| body.link_broken(l) == Some(BreakReason::Cut)).count() as u64;
         let outside = self.outside.iter().filter(|&&l| body.link_broken(l).is_some()).count() as u32;
         let forbidden = self.forbidden.iter().filter(|&&l| body.link_broken(l).is_some()).count() as u32;
-        let elapsed = self.steps as f32 * self.dt;
+        let elapsed = self.elapsed_s();
         let above = self.steps_above as f32 * self.dt;
         let over_time = self.goals.time_limit_s.is_some_and(|l| elapsed > l);
+        let g = &self.goals;
+        let sep_share = (separation / g.separation).clamp(0.0, 1.0);
+        let economy = if self.path_length > 0.0 {
+            (g.path_reference_m / self.path_length).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let task = if incision.is_some() {
+            "completion (60 x share of the incision and the target fibres cut)"
+        } else {
+            "completion (60 x share of target fibres cut)"
+        };
         let mut breakdown = vec![
+            ScoreItem { label: task.into(), points: 60.0 * completion },
             ScoreItem {
-                label: "completion (60 x share of target fibres cut)".into(),
-                points: 60.0 * completion,
+                label: "separation (20 x layer separation over the target up to the goal, x completion)"
+                    .into(),
+                points: 20.0 * sep_share * completion,
             },
             ScoreItem {
-                label: "separation (20 x mean layer separation over the target, up to the goal)".into(),
-                points: 20.0 * (separation / self.goals.separation).clamp(0.0, 1.0),
+                label: "economy (20 x reference path over path length, x completion)".into(),
+                points: 20.0 * economy * completion,
             },
-            ScoreItem {
-                label: "economy (20 x reference path over path length)".into(),
-                points: if self.path_length > 0.0 {
-                    20.0 * (REFERENCE_PATH_M / self.path_length).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                },
-            },
-            ScoreItem {
-                label: "layer links cut (-2 each)".into(),
-                points: -2.0 * damage.layer_links_cut as f32,
-            },
+            ScoreItem { label: "layer links cut (-2 each)".into(), points: -2.0 * layer_cut as f32 },
             ScoreItem { label: "fibres cut outside the target (-1 each)".into(), points: -(outside as f32) },
             ScoreItem {
                 label: "links broken in a forbidden region (-5 each)".into(),
@@ -372,24 +465,144 @@ impl Assessor {
             breakdown.push(ScoreItem { label: "over the time limit".into(), points: -10.0 });
         }
         let score = breakdown.iter().map(|i| i.points).sum::<f32>().clamp(0.0, 100.0);
+        let passed = score >= g.pass.score && completion >= g.pass.completion && forbidden == 0;
+
+        // What cost the most points, in the trainee's words.
+        let upper = tissue.layers().first().map_or("upper layer", |l| l.name.as_str());
+        let fibre_weight = if incision.is_some() { 30.0 } else { 60.0 };
+        let mut lost: Vec<(f32, String)> = Vec::new();
+        if let Some(i) = incision {
+            lost.push((
+                30.0 * (1.0 - i),
+                format!(
+                    "Finish the incision: {:.0} % of the marked line through the {upper} is cut.",
+                    100.0 * i
+                ),
+            ));
+        }
+        lost.push((
+            fibre_weight * (1.0 - fibres),
+            format!(
+                "Cut the fibres under the target: {cut} of {} cut (scalpel at depth B, under the lifted {upper}).",
+                self.target.len()
+            ),
+        ));
+        lost.push((
+            20.0 * (1.0 - sep_share) * completion.max(0.25),
+            format!(
+                "Lift the {upper} clear: the layers are {:.1} mm apart over the target, the goal is {:.1} mm.",
+                1000.0 * separation.max(0.0),
+                1000.0 * g.separation
+            ),
+        ));
+        lost.push((
+            20.0 * (1.0 - economy) * completion,
+            format!(
+                "Move more economically: the instrument travelled {:.0} mm; a careful session needs about {:.0} mm.",
+                1000.0 * self.path_length,
+                1000.0 * g.path_reference_m
+            ),
+        ));
+        let plural =
+            |n: u64, one: &str, many: &str| if n == 1 { one.to_string() } else { format!("{n} {many}") };
+        let layer_cuts = plural(layer_cut, "one link of a layer was", "links of the layers were");
+        lost.push((
+            2.0 * layer_cut as f32,
+            if incision.is_some() {
+                format!("Cut only along the marked incision, at depth U: {layer_cuts} cut elsewhere.")
+            } else {
+                format!("Do not cut through the layers (depth B cuts only the fibres): {layer_cuts} cut.")
+            },
+        ));
+        lost.push((
+            outside as f32,
+            format!(
+                "Keep the fibre cuts under the target: {} cut outside it.",
+                plural(outside.into(), "one fibre was", "fibres were")
+            ),
+        ));
+        lost.push((
+            5.0 * forbidden as f32,
+            format!(
+                "Stay clear of the forbidden region (the vessel): {} broken there.",
+                plural(forbidden.into(), "one link was", "links were")
+            ),
+        ));
+        lost.push((
+            2.0 * damage.links_torn as f32,
+            format!(
+                "Pull more gently, and cut what holds the tissue first: {} stretched until it tore.",
+                plural(damage.links_torn, "one link was", "links were")
+            ),
+        ));
+        lost.push((
+            10.0 * above,
+            format!("Ease off sooner: {above:.1} s above the stretch limit of {:.2}.", g.stretch_limit),
+        ));
+        if over_time {
+            lost.push((
+                10.0,
+                format!("Work faster: over the time limit of {:.0} s.", g.time_limit_s.unwrap_or(0.0)),
+            ));
+        }
+        lost.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut feedback: Vec<String> =
+            lost.into_iter().filter(|(p, _)| *p >= 0.5).take(2).map(|(_, s)| s).collect();
+        if feedback.is_empty() {
+            feedback.push("Nothing to improve: a clean, complete dissection.".into());
+        }
         Assessment {
+            score,
+            passed,
+            feedback,
             completion,
+            incision,
+            fibres,
             target_links: self.target.len() as u32,
             target_links_cut: cut,
             separation_m: separation,
-            layer_links_cut: damage.layer_links_cut,
+            layer_links_cut: layer_cut,
             connective_cut_outside: outside,
             forbidden_links_broken: forbidden,
             links_torn: damage.links_torn,
             peak_stretch: self.peak_stretch,
             time_above_limit_s: above,
             elapsed_s: elapsed,
+            started: self.started(),
             over_time,
             path_length_m: self.path_length,
             grasps: self.grasps,
-            score,
+            steps_done: self.steps_done.clone(),
             breakdown,
             force: self.force.assessment(),
+        }
+    }
+
+    /// The session report: the assessment first, then the goals and the history sampled to at most
+    /// [`REPORT_SAMPLES`] points (each keeping the highest stretch of the samples it stands for, so the
+    /// plot's peak is the assessment's).
+    pub fn report(&self, world: &World, title: &str, date: String) -> Report {
+        let assessment = self.assessment(world);
+        let mut history = self.history.clone();
+        if self.started() && self.interval_peak > 1.0 {
+            // The stretch since the last sample, so no peak is left out.
+            let (completion, ..) = self.completion(world.tissue());
+            history.push(Sample {
+                t: self.elapsed_s(),
+                completion,
+                stretch: self.interval_peak,
+                force_n: self.force.last(),
+            });
+        }
+        Report {
+            title: title.to_string(),
+            date,
+            passed: assessment.passed,
+            score: assessment.score,
+            feedback: assessment.feedback.clone(),
+            goals: self.goals.clone(),
+            assessment,
+            history: report::downsample(&history, REPORT_SAMPLES),
         }
     }
 }

@@ -28,6 +28,9 @@ impl View for AssessmentPanel {
                 }
                 ui.end_row();
             };
+            if let Some(i) = a.incision {
+                row("incision cut", format!("{:.0} %", 100.0 * i), false);
+            }
             row("target fibres cut", format!("{} / {}", a.target_links_cut, a.target_links), false);
             row("separation", format!("{:.1} mm", 1000.0 * a.separation_m), false);
             row("fibres cut outside", a.connective_cut_outside.to_string(), a.connective_cut_outside > 0);
@@ -40,7 +43,25 @@ impl View for AssessmentPanel {
             row("path length", format!("{:.0} mm", 1000.0 * a.path_length_m), false);
             row("grasps", a.grasps.to_string(), false);
         });
-        ui.label(egui::RichText::new(format!("score {:.1}", a.score)).heading());
+        let pass = frame.scene.goals.as_ref().map(|g| g.pass).unwrap_or_default();
+        ui.horizontal(|ui| {
+            ui.label(egui::RichText::new(format!("score {:.1}", a.score)).heading());
+            let (text, colour) = if a.passed {
+                ("pass", egui::Color32::from_rgb(120, 220, 120))
+            } else {
+                ("not passed yet", egui::Color32::from_rgb(255, 170, 60))
+            };
+            ui.colored_label(colour, text);
+        });
+        ui.label(format!(
+            "to pass: score {:.0}, completion {:.0} %, nothing broken in a forbidden region",
+            pass.score,
+            100.0 * pass.completion
+        ));
+        ui.label(egui::RichText::new("To improve").strong());
+        for f in &a.feedback {
+            ui.label(format!("• {f}"));
+        }
         for item in &a.breakdown {
             ui.label(format!("  {:+.1}  {}", item.points, item.label));
         }

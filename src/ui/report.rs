@@ -34,7 +34,11 @@ impl View for ReportWindow {
         let mut open = self.open;
         egui::Window::new("Session report").open(&mut open).resizable(false).show(ui.ctx(), |ui| {
             let a = &s.assessment;
-            ui.label(egui::RichText::new(format!("score {:.1}", a.score)).heading());
+            let verdict = if a.passed { "passed" } else { "not passed" };
+            ui.label(egui::RichText::new(format!("score {:.1} · {verdict}", a.score)).heading());
+            for f in &a.feedback {
+                ui.label(format!("• {f}"));
+            }
             ui.label(format!(
                 "completion {:.0} % · peak stretch {:.2} · {:.1} s · path {:.0} mm · {} grasps",
                 100.0 * a.completion,

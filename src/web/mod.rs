@@ -56,7 +56,7 @@ pub fn start() {
     let params = Params::from_url();
     let requests: Requests = Rc::default();
     let (session, error) = first_session(&params);
-    let current = params.scene.clone().unwrap_or_else(|| "meninges".into());
+    let current = params.scene.clone().unwrap_or_else(|| SCENES[0].0.into());
     page::wire(&SCENES.iter().map(|(n, _)| *n).collect::<Vec<_>>(), &current, &requests);
     let Some(session) = session else { return };
     if let Some(e) = &error {

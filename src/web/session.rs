@@ -15,7 +15,8 @@ use crate::ui::{FrameSample, Timing};
 
 /// The bundled scenes, by name (the default first).
 pub const SCENES: &[(&str, &str)] = &[
-    ("meninges", crate::scene::DEFAULT_SCENE),
+    ("durotomy", crate::scene::DEFAULT_SCENE),
+    ("meninges", include_str!("../../scenes/meninges.ron")),
     ("cylinder", include_str!("../../scenes/cylinder.ron")),
     ("sphere", include_str!("../../scenes/sphere.ron")),
     ("volume", include_str!("../../scenes/volume.ron")),
@@ -24,6 +25,9 @@ pub const SCENES: &[(&str, &str)] = &[
 
 /// The bundled scripts, by name.
 pub const SCRIPTS: &[(&str, &str)] = &[
+    ("durotomy", include_str!("../../scenes/scripts/durotomy.ron")),
+    ("durotomy_careful", include_str!("../../scenes/scripts/durotomy_careful.ron")),
+    ("durotomy_careless", include_str!("../../scenes/scripts/durotomy_careless.ron")),
     ("meninges", include_str!("../../scenes/scripts/meninges.ron")),
     ("meninges_careful", include_str!("../../scenes/scripts/meninges_careful.ron")),
     ("meninges_careless", include_str!("../../scenes/scripts/meninges_careless.ron")),
@@ -273,9 +277,14 @@ impl Session {
     /// `report.json`'s text, when the scene has goals.
     pub fn report_text(&self) -> Option<Result<String, String>> {
         let a = self.assessor()?;
-        Some(
-            crate::training::report_json(&a.assessment(self.world()), a.history()).map_err(|e| e.to_string()),
-        )
+        // The browser's clock (std's is not there on wasm32-unknown-unknown), to the second.
+        let iso = String::from(js_sys::Date::new_0().to_iso_string());
+        let date = match iso.split_once('.') {
+            Some((whole, _)) => format!("{whole}Z"),
+            None => iso,
+        };
+        let report = a.report(self.world(), &self.scene.title, date);
+        Some(crate::training::report_json(&report).map_err(|e| e.to_string()))
     }
 
     /// The figures of a finished script as `dissect run`'s `metrics.json` has them.
