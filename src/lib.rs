@@ -25,9 +25,9 @@
 //! | [`haptics`] | haptic devices (mouse, simulated, Haply Inverse3 behind the `haply` feature), the virtual coupling and its passivity controller | instrument, snapshot, web-time; `haply` and `tokio` with the feature |
 //! | [`training`] | exercise goals, live assessment and score, session report and plot | tissue, simulation |
 //! | [`scene`] | RON scenes, scripts and recordings: schema, loading, validation, errors at `path:line:column`; builds a world | chainmail, surface, tissue, instrument, simulation, training (goals), serde, ron |
-//! | [`runner`] | the [`runner::Episode`] every driver steps (world, assessor, recorder, command source), the script player, run metrics and final state | scene, simulation, training and below |
+//! | [`runner`] | the [`runner::Episode`] every driver steps (world, assessor, recorder, command source), the script player, run metrics and final state; natively, the simulation thread that steps an episode at its deadlines (`runner::SimThread`) | scene, simulation, training, haptics and below; crossbeam-channel, triple_buffer, spin_sleep |
 //! | [`render`] | wgpu device, scene pipelines and buffers, orbit camera and picking rays, headless PNG capture | wgpu, glam, bytemuck, image, `snapshot`; never winit or egui |
-//! | [`ui`] | the egui panels, one type per panel (`View`), and the actions they ask for | egui, `World`'s public API, scene, training (types); never winit or wgpu |
+//! | [`ui`] | the egui panels, one type per panel (`View`), and the actions they ask for | egui, `WorldView` (a copy of the world's figures), scene, training (types); never winit or wgpu |
 //! | `web` (wasm32 only) | the trainer in a browser: one canvas with both views, scenes from the page, downloads | winit (web), egui-winit, egui-wgpu, ui, render, `app`'s input logic, wasm-bindgen, web-sys |
 //! | [`app`] | the two windows, the event loop, input to instrument commands, the session (an episode, recording and replay, hot reload) | winit (only here), egui-winit, egui-wgpu, ui, render, and the simulation side's public API (`World`, `Episode`) |
 //!

@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 
 use crate::instrument::{Command, Hit, PROBE_RADIUS};
 use crate::render::OrbitCamera;
-use crate::simulation::{InstrumentKind, Snapshot, World};
+use crate::simulation::{InstrumentKind, Snapshot, WorldView};
 use crate::tissue::CutDepth;
 use crate::ui::ToolState;
 
@@ -153,43 +153,44 @@ impl Hand {
     }
 
     /// The left button went down with the cursor's ray `(origin, dir)` meeting the tissue at `hit`.
+    /// Returns the pick the forceps close on: the caller turns it into the element under it with the
+    /// world it has (`World::element_at`), before the commands pushed to `out`.
     pub fn press(
         &mut self,
-        world: &World,
+        world: &WorldView,
         camera: &OrbitCamera,
         ray: (Vec3, Vec3),
         hit: Option<Hit>,
         out: &mut Vec<Command>,
-    ) {
+    ) -> Option<Hit> {
         let (forward, _, _) = camera.basis();
         match self.tool.kind {
             InstrumentKind::Forceps => {
-                if let Some(held) = world.instrument().grasped.and_then(|e| world.tissue().world_position(e))
-                {
+                if let Some(held) = world.grasped_position() {
                     // The forceps were left clamped: take them up where they are.
                     self.stroke = Some(Stroke::Pull { point: Vec3::from(held), normal: forward });
                     self.tool.insert_mm = 0.0;
-                    return;
+                    return None;
                 }
-                let Some(hit) = hit else { return };
-                let Some(e) = world.element_at(&hit) else { return };
-                out.push(Command::GraspElement(e));
+                let hit = hit?;
                 self.tool.insert_mm = 0.0;
                 self.stroke = Some(Stroke::Pull { point: Vec3::from(hit.point), normal: forward });
+                return Some(hit);
             }
             InstrumentKind::Scalpel => {
-                let Some(hit) = hit else { return };
+                let hit = hit?;
                 out.push(Command::SetDepth(self.tool.depth));
                 out.push(Command::MoveTo(hit.point));
                 out.push(Command::BeginCut);
                 self.stroke = Some(Stroke::Cut);
             }
             InstrumentKind::Probe => {
-                let Some(hit) = hit else { return };
+                let hit = hit?;
                 self.stroke = Some(Stroke::Push { point: Vec3::from(hit.point), normal: forward });
                 out.push(Command::MoveTo(self.probe_tip(Vec3::from(hit.point), ray.1)));
             }
         }
+        None
     }
 
     fn probe_tip(&self, surface: Vec3, dir: Vec3) -> [f32; 3] {
@@ -198,7 +199,7 @@ impl Hand {
     }
 
     /// The cursor moved (or the insert depth changed) with the left button down, or hovering.
-    pub fn drag(&mut self, world: &World, ray: (Vec3, Vec3), hit: Option<Hit>, out: &mut Vec<Command>) {
+    pub fn drag(&mut self, world: &WorldView, ray: (Vec3, Vec3), hit: Option<Hit>, out: &mut Vec<Command>) {
         let (origin, dir) = ray;
         match self.stroke {
             Some(Stroke::Pull { point, normal }) => {

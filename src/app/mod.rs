@@ -86,22 +86,25 @@ pub struct AppOptions {
 /// Opens the windows and runs until the trainee's window is closed (or `frames` have been drawn).
 pub fn run(options: AppOptions) -> Result<(), AppError> {
     let session = match &options.source {
-        Source::Live => Session::live(
-            options.scene.as_deref(),
-            options.record.clone().unwrap_or_else(default_recording_path),
-        )?,
+        Source::Live => {
+            // The device (or the one line saying why there is none) before the first step.
+            let (device, message) = crate::haptics::open(&options.haptic);
+            if let Some(m) = &message {
+                println!("dissect: {m}");
+            }
+            let mut session = Session::live_with(
+                options.scene.as_deref(),
+                options.record.clone().unwrap_or_else(default_recording_path),
+                Some(crate::haptics::HapticLink::new(device)),
+            )?;
+            if let Some(m) = message {
+                session.say(m);
+            }
+            session
+        }
         Source::Replay(path) => Session::replay(path)?,
         Source::Demo(script) => Session::demo(options.scene.as_deref(), script)?,
     };
-    let mut session = session;
-    if session.input_enabled() {
-        let (device, message) = crate::haptics::open(&options.haptic);
-        if let Some(m) = message {
-            println!("dissect: {m}");
-            session.say(m);
-        }
-        session.set_haptic(crate::haptics::HapticLink::new(device));
-    }
     let event_loop = EventLoop::new().map_err(|e| AppError::Window(e.to_string()))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App { options, session, state: None, error: None, finished: false };
@@ -149,17 +152,22 @@ impl App {
     fn finish(&mut self) {
         if !self.finished {
             self.finished = true;
-            if let Some(state) = &self.state {
-                let seconds = state.opened.elapsed().as_secs_f64();
+            let seconds = self.state.as_ref().map(|s| s.opened.elapsed().as_secs_f64());
+            let episode = self.session.finish();
+            if let (Some(state), Some(seconds)) = (&self.state, seconds) {
+                let steps = episode.map_or(self.session.world().step_count(), |e| e.world().step_count());
+                let pace = self.session.published().pace;
                 println!(
-                    "dissect: {} frames in {seconds:.1} s ({:.1} fps), {} steps ({:.0} steps/s)",
+                    "dissect: {} frames in {seconds:.1} s ({:.1} fps), {steps} steps ({:.0} steps/s); \
+                     simulation thread, last second: {:.0} steps/s, worst jitter {:.0} µs, p99 late {:.0} µs",
                     state.frames,
                     state.frames as f64 / seconds.max(1e-9),
-                    self.session.world().step_count(),
-                    self.session.world().step_count() as f64 / seconds.max(1e-9)
+                    steps as f64 / seconds.max(1e-9),
+                    pace.steps_per_second,
+                    pace.worst_jitter_us,
+                    pace.p99_late_us
                 );
             }
-            self.session.finish();
         }
     }
 
@@ -191,7 +199,7 @@ impl App {
         // On a CPU rasteriser 4x MSAA costs about 3.5x a frame: draw windows single-sampled there.
         let samples = if gpu.is_software() { 1 } else { 4 };
         let mut renderer = SceneRenderer::with_samples(&gpu, format, Style::default(), samples);
-        renderer.update(&gpu, &self.session.snapshot).map_err(|e| AppError::Gpu(e.to_string()))?;
+        renderer.update(&gpu, self.session.snapshot()).map_err(|e| AppError::Gpu(e.to_string()))?;
         println!("dissect: {} on {} ({samples}x MSAA, {format:?})", self.session.scene.title, gpu.describe());
 
         let (trainee_rig, observer_rig) = camera_rigs(&self.session);
@@ -217,8 +225,7 @@ impl App {
             None => None,
         };
         let mut hand = Hand::default();
-        hand.tool.kind = self.session.world().instrument().kind;
-        hand.tool.depth = self.session.world().instrument().depth;
+        (hand.tool.kind, hand.tool.depth) = self.session.start_tool();
         Ok(State {
             gpu,
             renderer,
@@ -248,14 +255,14 @@ impl App {
         if session.poll_reload() {
             let mut dropped = Vec::new();
             state.hand.release(true, &mut dropped);
-            state.hand.tool.kind = session.world().instrument().kind;
+            state.hand.tool.kind = session.start_tool().0;
         }
         // A held stroke follows the cursor every frame (also when only the camera or insert changed).
         if state.hand.busy() && session.input_enabled() {
             drive_hand(state, session, false);
         }
         session.advance(dt);
-        state.renderer.update(&state.gpu, &session.snapshot).map_err(|e| AppError::Gpu(e.to_string()))?;
+        state.renderer.update(&state.gpu, session.snapshot()).map_err(|e| AppError::Gpu(e.to_string()))?;
 
         let mut actions = Vec::new();
         let assessment = session.assessment();
@@ -359,10 +366,12 @@ fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let camera = state.trainee.camera.camera;
     let pointer = state.trainee.pointer;
     session.refresh_picker();
-    let (ray, hit) = input::pick(&session.picker, &session.snapshot, &camera, &pointer);
+    let (ray, hit) = input::pick(&session.picker, session.snapshot(), &camera, &pointer);
     let mut out = Vec::new();
     if press {
-        state.hand.press(session.world(), &camera, ray, hit, &mut out);
+        if let Some(hit) = state.hand.press(session.world(), &camera, ray, hit, &mut out) {
+            session.grasp_at(hit);
+        }
     } else {
         state.hand.drag(session.world(), ray, hit, &mut out);
     }
@@ -397,16 +406,14 @@ fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action:
         Action::SetSweeps(n) if live => session.set_sweeps(n),
         Action::Reload if live && session.reload() => {
             state.hand.release(true, &mut Vec::new());
-            state.hand.tool.kind = session.world().instrument().kind;
+            state.hand.tool.kind = session.start_tool().0;
         }
         Action::Report => match session.write_report() {
             Some(summary) => {
                 state.trainee_ui.report.summary = Some(summary);
                 state.trainee_ui.report.open = true;
             }
-            None if session.assessor().is_none() => {
-                session.say("this scene sets no goals: nothing to report")
-            }
+            None if !session.has_goals() => session.say("this scene sets no goals: nothing to report"),
             None => {}
         },
         Action::Screenshot => screenshot(state, session, options),
@@ -455,7 +462,7 @@ fn screenshot(state: &mut State, session: &mut Session, options: &AppOptions) {
     let mut saved = Vec::new();
     for ((camera, w, h), name) in views.into_iter().zip(["trainee", "observer"]) {
         let path = dir.join(format!("{name}-{}.png", state.shots));
-        let result = render_to_image(&state.gpu, &session.snapshot, &camera, w.max(16), h.max(16))
+        let result = render_to_image(&state.gpu, session.snapshot(), &camera, w.max(16), h.max(16))
             .and_then(|image| save_png(&image, &path));
         match result {
             Ok(()) => saved.push(path.display().to_string()),

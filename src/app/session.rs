@@ -1,6 +1,6 @@
-//! The session: the scene, the episode it runs (the world on its clock, the commands given to it and
-//! recorded, or read from a recording and replayed, the assessment), the scene file watch. No windows
-//! here.
+//! The session: the scene, the episode it runs on the simulation thread (`runner::SimThread`: the
+//! world at the scene's rate, the commands given to it and recorded, or read from a recording and
+//! replayed, the assessment), what the thread last published, the scene file watch. No windows here.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime};
@@ -8,21 +8,18 @@ use std::time::{Duration, Instant, SystemTime};
 use super::AppError;
 use crate::chainmail::{Material, MaterialId};
 use crate::instrument::{Command as InstrumentCommand, Picker};
-use crate::runner::{Episode, Player, Source};
+use crate::runner::{Episode, Event, Given, Input, Player, Published, SimThread, Source};
 use crate::scene::{Action as ScriptAction, DEFAULT_SCENE, DEFAULT_SCENE_PATH, Recorder, Recording, Scene};
-use crate::simulation::{Command, Snapshot, World};
-use crate::training::{Assessment, Assessor};
-use crate::ui::{FrameSample, ReportSummary, Timing};
-
-/// Most wall time a frame spends stepping: past it the frame draws and the rest of the steps are
-/// dropped (the simulation falls behind real time instead of the window freezing).
-const SIM_BUDGET_PER_FRAME: Duration = Duration::from_millis(30);
+use crate::simulation::{Command, InstrumentKind, Snapshot, WorldView};
+use crate::tissue::CutDepth;
+use crate::training::{Assessment, Assessor, Report};
+use crate::ui::{FrameSample, ReportSummary, ThreadPace, Timing};
 /// How often the scene file's modification time is checked.
 const WATCH_EVERY: Duration = Duration::from_millis(500);
 
 /// Who drives the session's episode.
 pub enum Driver {
-    /// The trainee: commands gathered per frame, pushed before the frame's first step and recorded.
+    /// The trainee: commands gathered per frame, handed to the thread for its next step and recorded.
     Live {
         /// Where recordings go: the first path, then `-2`, `-3`... after reloads.
         record_base: PathBuf,
@@ -77,10 +74,15 @@ pub struct Session {
     pub scene_source: String,
     /// The scene's path as given (or the built-in name).
     pub scene_label: String,
-    /// The world on its clock, its assessment, its recording, and where its commands come from.
-    pub episode: Episode,
-    /// The world as of the last step, for drawing and picking.
-    pub snapshot: Snapshot,
+    /// The episode (world on its clock, assessment, recording, command source), stepping on its own
+    /// thread at the scene's rate; the windows read what it publishes.
+    sim: SimThread,
+    /// What the frame gives the world, gathered until the frame hands it to the thread.
+    pending: Vec<Given>,
+    /// The last move handed to the thread (a move to the same place is not sent again).
+    last_target: Option<[f32; 3]>,
+    /// The instrument and cutting depth the running world started with.
+    start_tool: (InstrumentKind, CutDepth),
     /// Picking against the snapshot (refreshed when the snapshot changes).
     pub picker: Picker,
     picker_step: Option<u64>,
@@ -93,7 +95,7 @@ pub struct Session {
     pub scene_error: Option<String>,
     message: Option<(String, Instant)>,
     started: Instant,
-    dropped: bool,
+    last_step: u64,
 }
 
 /// Now, UTC, as `2026-11-22_05-30-12` (names of recordings and screenshots).
@@ -128,7 +130,7 @@ fn numbered(base: &Path, n: u32) -> PathBuf {
 
 fn build(scene: &Scene, label: &str, source: Source) -> Result<Episode, AppError> {
     // Sessions relax by sweeps only, never by wall time, so that a recording replays bit for bit; a
-    // frame that cannot keep up drops steps instead (see `SIM_BUDGET_PER_FRAME`).
+    // thread that cannot keep up gives up deadlines instead (see `runner::thread::MAX_LAG`).
     let world = scene
         .build_world(false)
         .map_err(|e| AppError::Scene(format!("{label}: the tissue cannot be built: {e}")))?;
@@ -145,19 +147,66 @@ impl Session {
         source: Source,
     ) -> Result<Self, AppError> {
         let episode = build(&scene, &scene_label, source)?;
-        let mut snapshot = Snapshot::default();
-        episode.snapshot_into(&mut snapshot);
-        // A scene that cannot keep up is said once, in the window and the log.
+        Self::from_episode(scene, scene_source, scene_label, driver, episode)
+    }
+
+    /// A live session on the scene at `path` (watched for changes) or the built-in scene, recorded to
+    /// `record`, driven by the mouse alone.
+    #[cfg(test)]
+    pub fn live(path: Option<&Path>, record: PathBuf) -> Result<Self, AppError> {
+        Self::live_with(path, record, None)
+    }
+
+    /// A live session driven, besides the mouse, by a haptic device from its first step.
+    pub fn live_with(
+        path: Option<&Path>,
+        record: PathBuf,
+        haptic: Option<crate::haptics::HapticLink>,
+    ) -> Result<Self, AppError> {
+        let (scene, source, label) = read_scene(path)?;
+        let mut driver = Driver::Live { record_base: record, recordings: 0 };
+        // The episode is built with its recorder and device before the thread takes it, so that
+        // nothing of the first steps goes unrecorded.
+        let mut episode = build(&scene, &label, Source::Live)?;
+        let mut said = None;
+        match start_recording(&mut driver, &label, &source) {
+            Ok(Some(r)) => episode.record_to(r),
+            Ok(None) => {}
+            Err(m) => said = Some(m),
+        }
+        if let Some(link) = haptic {
+            episode.set_haptic(link);
+        }
+        let mut session = Self::from_episode(scene, source, label, driver, episode)?;
+        if let Some(m) = said {
+            session.say(m);
+        }
+        session.watch = path.map(Watch::new);
+        Ok(session)
+    }
+
+    fn from_episode(
+        scene: Scene,
+        scene_source: String,
+        scene_label: String,
+        driver: Driver,
+        episode: Episode,
+    ) -> Result<Self, AppError> {
+        let start_tool = tool_of(&episode);
         let warning = scene.cost_warning().map(|w| {
             eprintln!("dissect: {scene_label}: warning: {w}");
             (format!("warning: {w}"), Instant::now())
         });
+        let sim = SimThread::spawn(episode)
+            .map_err(|e| AppError::Scene(format!("cannot start the simulation thread: {e}")))?;
         Ok(Self {
             scene,
             scene_source,
             scene_label,
-            episode,
-            snapshot,
+            sim,
+            pending: Vec::with_capacity(64),
+            last_target: None,
+            start_tool,
             picker: Picker::default(),
             picker_step: None,
             driver,
@@ -166,26 +215,8 @@ impl Session {
             scene_error: None,
             message: warning,
             started: Instant::now(),
-            dropped: false,
+            last_step: 0,
         })
-    }
-
-    /// A live session on the scene at `path` (watched for changes) or the built-in scene, recorded to
-    /// `record`.
-    pub fn live(path: Option<&Path>, record: PathBuf) -> Result<Self, AppError> {
-        let (source, label) = match path {
-            Some(p) => (
-                crate::scene::read_file(p).map_err(|e| AppError::Scene(e.to_string()))?,
-                p.display().to_string(),
-            ),
-            None => (DEFAULT_SCENE.to_string(), DEFAULT_SCENE_PATH.to_string()),
-        };
-        let scene = Scene::from_str(&source, &label).map_err(|e| AppError::Scene(e.to_string()))?;
-        let driver = Driver::Live { record_base: record, recordings: 0 };
-        let mut session = Self::with(scene, source, label, driver, Source::Live)?;
-        session.watch = path.map(Watch::new);
-        session.start_recording();
-        Ok(session)
     }
 
     /// Plays a recording (`dissect replay FILE`) on the scene it carries.
@@ -207,44 +238,22 @@ impl Session {
     /// Plays a script on a scene (the hidden `--demo-script`, for screenshots and demonstrations).
     pub fn demo(scene_path: Option<&Path>, script_path: &Path) -> Result<Self, AppError> {
         let script = crate::scene::Script::load(script_path).map_err(|e| AppError::Scene(e.to_string()))?;
-        // An empty recording path: nothing is recorded.
-        let mut session = Self::live(scene_path, PathBuf::new())?;
+        let (scene, source, label) = read_scene(scene_path)?;
         script
-            .check_against(&session.scene)
+            .check_against(&scene)
             .map_err(|e| AppError::Scene(format!("{}: {e}", script_path.display())))?;
         let commands = script.0.iter().filter(|a| matches!(a, ScriptAction::Command(_))).count();
-        session.driver = Driver::Replay { commands, label: script_path.display().to_string() };
-        session.episode.set_source(Source::Script(Player::new(script.0)));
+        let driver = Driver::Replay { commands, label: script_path.display().to_string() };
+        let mut session = Self::with(scene, source, label, driver, Source::Script(Player::new(script.0)))?;
+        session.watch = scene_path.map(Watch::new);
         Ok(session)
     }
 
-    fn start_recording(&mut self) {
-        let Driver::Live { record_base, recordings } = &mut self.driver else {
-            return;
-        };
-        if record_base.as_os_str().is_empty() {
-            return;
-        }
-        *recordings += 1;
-        let path = numbered(record_base, *recordings);
-        match Recorder::create(&path, &self.scene_label, &self.scene_source) {
-            Ok(r) => {
-                println!("dissect: recording to {}", path.display());
-                self.episode.record_to(r);
-            }
-            Err(e) => {
-                let m = format!("cannot record to {}: {e}", path.display());
-                eprintln!("dissect: {m}");
-                self.say(m);
-            }
-        }
-    }
-
-    /// Ends the current recording (at the world's step), printing its path.
-    fn finish_recording(&mut self) {
-        let step = self.world().step_count();
-        let recorded = self.episode.recorded();
-        if let Some(r) = self.episode.take_recorder() {
+    /// Ends a recording (at its episode's step), printing its path.
+    fn finish_recording(episode: &mut Episode) {
+        let step = episode.world().step_count();
+        let recorded = episode.recorded();
+        if let Some(r) = episode.take_recorder() {
             let path = r.path().to_path_buf();
             match r.finish(step) {
                 Ok(()) => println!(
@@ -256,24 +265,34 @@ impl Session {
         }
     }
 
+    /// What the thread published last (the world as of a recent step).
+    pub fn published(&self) -> &Published {
+        self.sim.current()
+    }
+
+    /// The world's snapshot as of the last frame taken from the thread.
+    pub fn snapshot(&self) -> &Snapshot {
+        &self.sim.current().snapshot
+    }
+
     /// The recording's path, if recording.
     pub fn recording_path(&self) -> Option<PathBuf> {
-        self.episode.recorder().map(|r| r.path().to_path_buf())
+        self.published().recording.clone()
     }
 
-    /// The world.
-    pub fn world(&self) -> &World {
-        self.episode.world()
+    /// The world's figures as of the last frame taken from the thread.
+    pub fn world(&self) -> &WorldView {
+        &self.sim.current().view
     }
 
-    /// The live assessment, when the scene has goals.
-    pub fn assessor(&self) -> Option<&Assessor> {
-        self.episode.assessor()
+    /// Whether the scene sets goals (and so has an assessment and a report).
+    pub fn has_goals(&self) -> bool {
+        self.scene.goals.is_some()
     }
 
-    /// Drives the instrument from a haptic device from the next step on.
-    pub fn set_haptic(&mut self, link: crate::haptics::HapticLink) {
-        self.episode.set_haptic(link);
+    /// The instrument and cutting depth the running world started with.
+    pub fn start_tool(&self) -> (InstrumentKind, CutDepth) {
+        self.start_tool
     }
 
     /// Whether user input reaches the world.
@@ -282,90 +301,116 @@ impl Session {
     }
 
     /// Gathers a command for the next step (ignored while replaying). Consecutive moves collapse into
-    /// the last one; a move to where the instrument already is, with nothing else pending, is dropped.
+    /// the last one; a move to where the last move went, with nothing else pending, is dropped.
     pub fn queue(&mut self, command: impl Into<Command>) {
         use InstrumentCommand::MoveTo;
         let command = command.into();
         if !self.input_enabled() {
             return;
         }
-        if self.episode.pending().is_empty() && command == MoveTo(self.world().instrument().target).into() {
-            return;
+        if let Command::Instrument(MoveTo(p)) = &command {
+            if self.pending.is_empty() && self.last_target == Some(*p) {
+                return;
+            }
+            if let Some(Given::Command(Command::Instrument(MoveTo(last)))) = self.pending.last_mut() {
+                *last = *p;
+                return;
+            }
         }
-        if let (Command::Instrument(MoveTo(p)), Some(Command::Instrument(MoveTo(last)))) =
-            (&command, self.episode.last_pending_mut())
-        {
-            *last = *p;
-            return;
-        }
-        self.episode.push(command);
+        self.pending.push(Given::Command(command));
     }
 
-    /// Runs the steps a frame of `frame` real time calls for on the world's clock (see
-    /// [`Episode::advance`]): live commands are pushed (and recorded with that step's number) before the
-    /// first of them; a replay feeds its player before each.
+    /// Forceps: close on the element under `hit` at the next step (the thread finds it in its world).
+    pub fn grasp_at(&mut self, hit: crate::instrument::Hit) {
+        if self.input_enabled() {
+            self.pending.push(Given::GraspAt(hit));
+        }
+    }
+
+    /// Hands the frame's input to the simulation thread (stamped with the step last seen) and takes
+    /// the latest frame it published; `frame` is the real time since the last frame. The steps run on
+    /// the thread at the scene's rate whatever the frame rate.
     pub fn advance(&mut self, frame: Duration) {
         let t = Instant::now();
-        let a = self.episode.advance(frame, Some(SIM_BUDGET_PER_FRAME));
-        if let Some((path, e)) = self.episode.take_record_error() {
-            eprintln!("dissect: recording stopped: {path}: {e}");
+        if let Some(Given::Command(Command::Instrument(InstrumentCommand::MoveTo(p)))) = self
+            .pending
+            .iter()
+            .rev()
+            .find(|g| matches!(g, Given::Command(Command::Instrument(InstrumentCommand::MoveTo(_)))))
+        {
+            self.last_target = Some(*p);
         }
-        if let Some(m) = self.episode.take_haptic_error() {
-            eprintln!("dissect: {m}");
-            self.say(m);
+        self.sim.give(std::mem::take(&mut self.pending));
+        let published = self.sim.latest();
+        let step = published.view.step_count();
+        let pace = published.pace;
+        let steps = step.saturating_sub(self.last_step) as u32;
+        self.last_step = step;
+        for event in self.sim.events() {
+            self.on_event(event);
         }
-        if let Some(notice) = self.episode.world_mut().tissue_mut().take_notice() {
-            self.say(notice);
-        }
-        self.dropped = a.dropped;
-        if a.steps > 0 {
-            self.episode.snapshot_into(&mut self.snapshot);
-        }
+        self.timing.set_pace(ThreadPace {
+            steps_per_second: pace.steps_per_second,
+            mean_step_us: pace.mean_step_us,
+            worst_jitter_us: pace.worst_jitter_us,
+            p99_late_us: pace.p99_late_us,
+            input_lag_steps: pace.input_lag_steps,
+            behind: pace.behind,
+        });
         self.timing.push(FrameSample {
             t: self.started.elapsed().as_secs_f64(),
             frame_ms: frame.as_secs_f32() * 1000.0,
             sim_ms: t.elapsed().as_secs_f32() * 1000.0,
-            step_us: if a.steps > 0 { a.step_us / a.steps as f32 } else { 0.0 },
-            steps: a.steps,
+            step_us: pace.mean_step_us,
+            steps,
         });
+    }
+
+    fn on_event(&mut self, event: Event) {
+        match event {
+            Event::Replaced(mut old) => Self::finish_recording(&mut old),
+            Event::Message(m) => {
+                eprintln!("dissect: {m}");
+                self.say(m);
+            }
+            Event::Report(..) => {}
+        }
     }
 
     /// Rebuilds the picker if the snapshot moved on since it was last built.
     pub fn refresh_picker(&mut self) {
-        if self.picker_step != Some(self.snapshot.step) {
-            self.picker.refresh(&self.snapshot);
-            self.picker_step = Some(self.snapshot.step);
+        let snapshot = &self.sim.current().snapshot;
+        if self.picker_step != Some(snapshot.step) {
+            self.picker.refresh(snapshot);
+            self.picker_step = Some(snapshot.step);
         }
     }
 
-    /// Whether the simulation runs slower than real time: the last frame dropped time, or fewer than
-    /// 90 % of the scene's steps per second ran over the last second.
+    /// Whether the simulation runs slower than real time: the thread gave up deadlines, or ran fewer
+    /// than 90 % of the scene's steps per second over its last full second.
     pub fn behind(&self) -> bool {
-        let rate = self.world().config().rate_hz as f32;
+        let p = &self.published().pace;
         let warm = self.started.elapsed() > Duration::from_secs(2);
-        let running = !self.replay_finished();
-        running
-            && (self.world().is_behind()
-                || self.dropped
-                || (warm && self.timing.steps_per_second() < 0.9 * rate))
+        let running = !self.replay_finished() && !self.published().paused;
+        running && (p.behind || (warm && p.steps_per_second < 0.9 * p.rate_hz as f32))
     }
 
     /// Whether a replay has played everything.
     pub fn replay_finished(&self) -> bool {
-        matches!(self.driver, Driver::Replay { .. }) && self.episode.finished()
+        matches!(self.driver, Driver::Replay { .. }) && self.published().finished
     }
 
     /// One line about the session for the status bar.
     pub fn status(&self) -> String {
-        match (&self.driver, self.episode.recorder()) {
-            (Driver::Live { .. }, Some(r)) => {
-                format!("REC {} ({} commands)", r.path().display(), self.episode.recorded())
+        let p = self.published();
+        match (&self.driver, &p.recording) {
+            (Driver::Live { .. }, Some(path)) => {
+                format!("REC {} ({} commands)", path.display(), p.recorded)
             }
             (Driver::Live { .. }, None) => "not recording".to_string(),
-            (Driver::Replay { label, commands }, _) => format!(
-                "REPLAY {label} ({commands} commands){}",
-                if self.episode.finished() { " — finished" } else { "" }
-            ),
+            (Driver::Replay { label, commands }, _) => {
+                format!("REPLAY {label} ({commands} commands){}", if p.finished { " — finished" } else { "" })
+            }
         }
     }
 
@@ -379,9 +424,9 @@ impl Session {
         self.message.as_ref().filter(|(_, t)| t.elapsed() < Duration::from_secs(6)).map(|(m, _)| m.as_str())
     }
 
-    /// The assessment now.
+    /// The assessment as of the last frame taken from the thread.
     pub fn assessment(&self) -> Option<Assessment> {
-        self.assessor().map(|a| a.assessment(self.world()))
+        self.published().assessment.clone()
     }
 
     /// Replaces a material; a refusal is shown.
@@ -405,8 +450,9 @@ impl Session {
         changed && self.reload()
     }
 
-    /// Loads the scene again (from its file, or the built-in text): on success the world restarts (and
-    /// a new recording begins); on failure the error is kept for display and the running scene stays.
+    /// Loads the scene again (from its file, or the built-in text): on success the world restarts on
+    /// the thread (and a new recording begins; the old one is finished when the thread hands its
+    /// episode back); on failure the error is kept for display and the running scene stays.
     pub fn reload(&mut self) -> bool {
         if !self.input_enabled() {
             return false;
@@ -425,7 +471,7 @@ impl Session {
                 return false;
             }
         };
-        let episode = match build(&scene, &self.scene_label, Source::Live) {
+        let mut episode = match build(&scene, &self.scene_label, Source::Live) {
             Ok(x) => x,
             Err(e) => {
                 eprintln!("{e}");
@@ -433,34 +479,58 @@ impl Session {
                 return false;
             }
         };
-        self.finish_recording();
+        match start_recording(&mut self.driver, &self.scene_label, &source) {
+            Ok(Some(r)) => episode.record_to(r),
+            Ok(None) => {}
+            Err(m) => self.say(m),
+        }
+        self.start_tool = tool_of(&episode);
         self.scene = scene;
         self.scene_source = source;
-        self.episode = episode;
-        self.episode.snapshot_into(&mut self.snapshot);
+        // Input gathered for the old world does not reach the new one.
+        self.pending.clear();
+        self.last_target = None;
+        self.sim.send(Input::Replace(Box::new(episode)));
         self.picker_step = None;
+        self.last_step = 0;
         self.scene_error = None;
-        self.start_recording();
         self.say(format!("reloaded {}", self.scene_label));
         true
     }
 
     /// Writes `<recording>.report.json` and `<recording>.report.png` (next to the recording, or in the
-    /// current folder) when the scene has goals.
+    /// current folder) when the scene has goals, from the report the thread makes of its world now.
     pub fn write_report(&mut self) -> Option<ReportSummary> {
-        let assessor = self.episode.assessor()?;
-        let assessment = assessor.assessment(self.episode.world());
+        if !self.has_goals() {
+            return None;
+        }
+        let (title, date) = (self.scene.title.clone(), crate::training::utc_now_string());
+        self.sim.send(Input::Report { title, date });
+        let t = Instant::now();
+        let report = loop {
+            match self.sim.wait_event(Duration::from_millis(100)) {
+                Some(Event::Report(report)) => break report?,
+                Some(other) => self.on_event(other),
+                None if t.elapsed() > Duration::from_secs(5) => {
+                    self.say("report not written: the simulation thread did not answer");
+                    return None;
+                }
+                None => {}
+            }
+        };
         let base = self.recording_path().unwrap_or_else(|| PathBuf::from("session.ron"));
+        self.write_report_files(&report, &base)
+    }
+
+    fn write_report_files(&mut self, report: &Report, base: &Path) -> Option<ReportSummary> {
         let json = base.with_extension("report.json");
         let png = base.with_extension("report.png");
-        let report =
-            assessor.report(self.episode.world(), &self.scene.title, crate::training::utc_now_string());
-        let result = crate::training::write_report(&json, &report)
-            .and_then(|()| crate::training::write_plot(&png, &report));
+        let result = crate::training::write_report(&json, report)
+            .and_then(|()| crate::training::write_plot(&png, report));
         match result {
             Ok(()) => {
                 println!("dissect: report written to {} and {}", json.display(), png.display());
-                Some(ReportSummary { assessment, json, png })
+                Some(ReportSummary { assessment: report.assessment.clone(), json, png })
             }
             Err(e) => {
                 self.say(format!("report not written: {e}"));
@@ -469,18 +539,75 @@ impl Session {
         }
     }
 
-    /// Ends the session: the report (with goals) and the recording are written.
-    pub fn finish(&mut self) {
-        if self.input_enabled() {
-            self.write_report();
+    /// Ends the session: the thread stops, the report (with goals) and the recordings are written.
+    /// Returns the episode as it ended (`None` when it already ended).
+    pub fn finish(&mut self) -> Option<Episode> {
+        let (episode, events) = self.sim.stop();
+        for event in events {
+            self.on_event(event);
+        }
+        let mut episode = episode?;
+        if self.input_enabled()
+            && let Some(assessor) = episode.assessor()
+        {
+            let report =
+                assessor.report(episode.world(), &self.scene.title, crate::training::utc_now_string());
+            let base = episode
+                .recorder()
+                .map(|r| r.path().to_path_buf())
+                .unwrap_or_else(|| PathBuf::from("session.ron"));
+            self.write_report_files(&report, &base);
         }
         if let Driver::Replay { commands, .. } = &self.driver {
             println!(
                 "dissect: replay ended at step {}; {commands} commands played",
-                self.world().step_count()
+                episode.world().step_count()
             );
         }
-        self.finish_recording();
+        Self::finish_recording(&mut episode);
+        Some(episode)
+    }
+}
+
+/// The scene at `path` (or the built-in one), its text and its label.
+fn read_scene(path: Option<&Path>) -> Result<(Scene, String, String), AppError> {
+    let (source, label) = match path {
+        Some(p) => {
+            (crate::scene::read_file(p).map_err(|e| AppError::Scene(e.to_string()))?, p.display().to_string())
+        }
+        None => (DEFAULT_SCENE.to_string(), DEFAULT_SCENE_PATH.to_string()),
+    };
+    let scene = Scene::from_str(&source, &label).map_err(|e| AppError::Scene(e.to_string()))?;
+    Ok((scene, source, label))
+}
+
+/// The tool the episode's world starts with.
+fn tool_of(episode: &Episode) -> (InstrumentKind, CutDepth) {
+    let i = episode.world().instrument();
+    (i.kind, i.depth)
+}
+
+/// Opens the next recording of a live driver: `Ok(None)` when recording is off (an empty path), an
+/// error message when the file cannot be created.
+fn start_recording(driver: &mut Driver, label: &str, source: &str) -> Result<Option<Recorder>, String> {
+    let Driver::Live { record_base, recordings } = driver else {
+        return Ok(None);
+    };
+    if record_base.as_os_str().is_empty() {
+        return Ok(None);
+    }
+    *recordings += 1;
+    let path = numbered(record_base, *recordings);
+    match Recorder::create(&path, label, source) {
+        Ok(r) => {
+            println!("dissect: recording to {}", path.display());
+            Ok(Some(r))
+        }
+        Err(e) => {
+            let m = format!("cannot record to {}: {e}", path.display());
+            eprintln!("dissect: {m}");
+            Err(m)
+        }
     }
 }
 
@@ -498,27 +625,38 @@ mod tests {
     }
 
     #[test]
-    fn live_commands_are_pushed_before_a_step_and_replayed_alike() {
+    fn a_live_session_on_its_thread_replays_to_the_same_state() {
+        use crate::runner::State;
         let dir = std::env::temp_dir().join(format!("dissect-session-{}", std::process::id()));
         let rec = dir.join("r.ron");
         let mut live = Session::live(None, rec.clone()).expect("live session");
-        live.queue(InstrumentCommand::Select(crate::simulation::InstrumentKind::Scalpel));
+        live.queue(InstrumentCommand::Select(InstrumentKind::Scalpel));
         live.queue(InstrumentCommand::MoveTo([0.0, 0.01, 0.0]));
         live.queue(InstrumentCommand::MoveTo([0.001, 0.01, 0.0]));
         live.advance(Duration::from_millis(5));
+        std::thread::sleep(Duration::from_millis(30));
         live.queue(InstrumentCommand::MoveTo([0.002, 0.01, 0.0]));
-        live.advance(Duration::from_micros(100)); // no step: the command waits
-        live.advance(Duration::from_millis(3));
-        let steps = live.world().step_count();
-        assert_eq!(steps, 8);
-        live.finish();
+        live.advance(Duration::from_millis(30));
+        std::thread::sleep(Duration::from_millis(30));
+        live.advance(Duration::from_millis(30));
+        let ended = live.finish().expect("the live episode");
+        assert!(live.finish().is_none(), "a session ends once");
+        let steps = ended.world().step_count();
+        assert!(steps > 0);
         let mut replay = Session::replay(&rec).expect("replay");
-        for _ in 0..10 {
+        let t = Instant::now();
+        while !replay.replay_finished() {
+            assert!(t.elapsed() < Duration::from_secs(30), "the replay does not end");
             replay.advance(Duration::from_millis(5));
+            std::thread::sleep(Duration::from_millis(5));
         }
-        assert_eq!(replay.world().step_count(), steps);
-        assert_eq!(replay.world().instrument().target, [0.002, 0.01, 0.0]);
-        assert!(replay.replay_finished());
+        let replayed = replay.finish().expect("the replayed episode");
+        assert_eq!(replayed.world().step_count(), steps);
+        assert_eq!(replayed.world().instrument().target, [0.002, 0.01, 0.0]);
+        let state = |e: &Episode| {
+            serde_json::to_string(&State::of(e.world().tissue(), e.world().step_count())).expect("json")
+        };
+        assert_eq!(state(&replayed), state(&ended));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

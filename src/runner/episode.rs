@@ -76,6 +76,11 @@ impl Episode {
         self.haptic = Some(link);
     }
 
+    /// Takes the haptic device away (to hand it to the episode that replaces this one).
+    pub fn take_haptic(&mut self) -> Option<crate::haptics::HapticLink> {
+        self.haptic.take()
+    }
+
     /// Why the haptic device was dropped (it went away or reported nonsense), taken.
     pub fn take_haptic_error(&mut self) -> Option<String> {
         self.haptic_error.take()

@@ -7,10 +7,14 @@
 mod episode;
 mod player;
 mod stats;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod thread;
 
 pub use episode::{Advance, Episode, Source};
 pub use player::{Player, resolve};
 pub use stats::StepTimes;
+#[cfg(not(target_arch = "wasm32"))]
+pub use thread::{Event, Given, Input, Pace, Published, SimThread};
 
 use serde::Serialize;
 

@@ -6,11 +6,13 @@
 mod clock;
 mod command;
 mod force;
+mod view;
 mod world;
 
 pub use clock::{FixedClock, MAX_FRAME_DELTA};
 pub use command::Command;
 pub use force::{CUT_WINDOW_S, Forces};
+pub use view::WorldView;
 pub use world::{PHASES, StepCounters, World, WorldConfig};
 
 // The snapshot vocabulary lives one floor down, in `crate::snapshot`; re-exported for the app side.

@@ -10,7 +10,7 @@ impl View for AssessmentPanel {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &Frame<'_>, actions: &mut Vec<Action>) {
         let Some(a) = frame.assessment else {
             ui.label("This scene sets no goals, so there is no score. Add `goals: (target: ...)` to the scene to assess the exercise.");
-            ui.label(format!("Peak stretch now: {:.2}", frame.world.tissue().max_stretch()));
+            ui.label(format!("Peak stretch now: {:.2}", frame.world.max_stretch()));
             return;
         };
         let limit = frame.scene.goals.as_ref().map(|g| g.stretch_limit).unwrap_or(f32::INFINITY);

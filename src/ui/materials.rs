@@ -10,10 +10,8 @@ pub struct MaterialPanel;
 
 /// The tissue's materials with a name each: the layers' (outer first) and the connective fibres'.
 pub fn named_materials(frame: &Frame<'_>) -> Vec<(String, MaterialId)> {
-    let tissue = frame.world.tissue();
-    let mut out: Vec<(String, MaterialId)> =
-        tissue.layers().iter().map(|l| (l.name.clone(), l.material)).collect();
-    for k in 0..tissue.body().materials().len() {
+    let mut out: Vec<(String, MaterialId)> = frame.world.layers().to_vec();
+    for k in 0..frame.world.materials().len() {
         let id = MaterialId(k as u16);
         if !out.iter().any(|(_, m)| *m == id) {
             out.push(("connective".to_string(), id));
@@ -28,11 +26,10 @@ fn slider(ui: &mut egui::Ui, label: &str, value: &mut f32, range: std::ops::Rang
 
 impl View for MaterialPanel {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &Frame<'_>, actions: &mut Vec<Action>) {
-        let body = frame.world.tissue().body();
         ui.label("Limits relative to rest length: stretch ≤ max, compress ≥ min, shear ≤ max.");
         ui.add_enabled_ui(frame.input_enabled, |ui| {
             for (name, id) in named_materials(frame) {
-                let Some(current) = body.material(id).copied() else { continue };
+                let Some(current) = frame.world.material(id).copied() else { continue };
                 let mut m: Material = current;
                 ui.label(egui::RichText::new(name).strong());
                 let mut changed = false;

@@ -1,6 +1,6 @@
 //! The trainer's panels, drawn with egui: one type per panel, each implementing [`View`].
 //!
-//! Owns what the panels show and how; it reads the world only through [`World`]'s public API and the
+//! Owns what the panels show and how; it reads the world only through a [`WorldView`] (a copy of its figures) and the
 //! numbers the app hands in ([`Frame`]), and it changes nothing itself: every control returns an
 //! [`Action`] that the app carries out (so that instrument commands are recorded and replayed). May
 //! import egui and the simulation side's public types; never winit or wgpu.
@@ -23,11 +23,11 @@ pub use materials::MaterialPanel;
 pub use monitor::MonitorPanel;
 pub use report::{ReportSummary, ReportWindow};
 pub use simulation::SimulationPanel;
-pub use timing::{FrameSample, Timing};
+pub use timing::{FrameSample, ThreadPace, Timing};
 
 use crate::chainmail::{Material, MaterialId};
 use crate::scene::Scene;
-use crate::simulation::{InstrumentKind, World};
+use crate::simulation::{InstrumentKind, WorldView};
 use crate::tissue::CutDepth;
 use crate::training::Assessment;
 
@@ -64,8 +64,9 @@ pub enum Action {
 
 /// Everything a panel may read in one frame.
 pub struct Frame<'a> {
-    /// The world as of the last step.
-    pub world: &'a World,
+    /// The world as of the last step the windows were handed (a copy: the world itself may be
+    /// stepping on its own thread).
+    pub world: &'a WorldView,
     /// The scene running.
     pub scene: &'a Scene,
     /// The hand: instrument, depth, roll, tilt, insert.

@@ -18,6 +18,12 @@ impl View for MonitorPanel {
             t.steps_per_second(),
             if frame.behind { " · behind" } else { "" }
         ));
+        if let Some(p) = t.pace() {
+            ui.label(format!(
+                "simulation thread: {:.0} steps/s · worst jitter {:.0} µs · p99 late {:.0} µs · input lag {} steps",
+                p.steps_per_second, p.worst_jitter_us, p.p99_late_us, p.input_lag_steps
+            ));
+        }
         let total = c.total_us().max(f32::MIN_POSITIVE);
         egui::Grid::new("phases").striped(true).num_columns(3).show(ui, |ui| {
             ui.strong("phase");
@@ -51,7 +57,7 @@ impl View for MonitorPanel {
                 ui.end_row();
             }
         });
-        let d = frame.world.tissue().damage();
+        let d = frame.world.damage();
         ui.label(format!(
             "damage: {} layer links cut, {} fibres cut, {} torn",
             d.layer_links_cut, d.connective_links_cut, d.links_torn

@@ -62,6 +62,9 @@ impl View for SimulationPanel {
             frame.world.config().rate_hz,
             t.mean_step_us()
         ));
+        if let Some(p) = t.pace() {
+            ui.label(format!("own thread · worst jitter {:.0} µs", p.worst_jitter_us));
+        }
         if frame.behind {
             ui.colored_label(egui::Color32::from_rgb(255, 170, 60), "slower than real time");
         }

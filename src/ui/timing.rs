@@ -20,10 +20,28 @@ pub struct FrameSample {
     pub steps: u32,
 }
 
-/// A rolling history of [`FrameSample`]s.
+/// The pace a simulation thread kept over its last full second (measured by the thread itself).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ThreadPace {
+    /// Steps run in that second.
+    pub steps_per_second: f32,
+    /// Mean step time, microseconds.
+    pub mean_step_us: f32,
+    /// Worst deviation of the interval between two step starts from the step length, microseconds.
+    pub worst_jitter_us: f32,
+    /// 99th percentile of a step start's lateness after its deadline, microseconds.
+    pub p99_late_us: f32,
+    /// Steps between the frame input was given on and the step it reached the world.
+    pub input_lag_steps: u64,
+    /// Whether the thread gave up deadlines it could not keep.
+    pub behind: bool,
+}
+
+/// A rolling history of [`FrameSample`]s, and the simulation thread's pace when there is one.
 #[derive(Clone, Debug, Default)]
 pub struct Timing {
     samples: VecDeque<FrameSample>,
+    pace: Option<ThreadPace>,
 }
 
 impl Timing {
@@ -33,6 +51,16 @@ impl Timing {
         while self.samples.front().is_some_and(|s| sample.t - s.t > WINDOW_S) {
             self.samples.pop_front();
         }
+    }
+
+    /// Sets the simulation thread's pace (the steps then run apart from the frames).
+    pub fn set_pace(&mut self, pace: ThreadPace) {
+        self.pace = Some(pace);
+    }
+
+    /// The simulation thread's pace, when the world steps on a thread of its own.
+    pub fn pace(&self) -> Option<&ThreadPace> {
+        self.pace.as_ref()
     }
 
     /// The samples, oldest first.
@@ -48,8 +76,11 @@ impl Timing {
         if ms > 0.0 { 1000.0 * recent.len() as f32 / ms } else { 0.0 }
     }
 
-    /// Simulated steps per wall-clock second over the last second.
+    /// Simulated steps per wall-clock second over the last second (the thread's count when there is one).
     pub fn steps_per_second(&self) -> f32 {
+        if let Some(p) = &self.pace {
+            return p.steps_per_second;
+        }
         let Some(last) = self.samples.back() else { return 0.0 };
         let recent = self.samples.iter().filter(|s| last.t - s.t < 1.0);
         let (steps, ms) = recent.fold((0u32, 0.0f32), |(n, ms), s| (n + s.steps, ms + s.frame_ms));
@@ -58,6 +89,9 @@ impl Timing {
 
     /// Mean step time over the last second, microseconds.
     pub fn mean_step_us(&self) -> f32 {
+        if let Some(p) = &self.pace {
+            return p.mean_step_us;
+        }
         let Some(last) = self.samples.back() else { return 0.0 };
         let recent = self.samples.iter().filter(|s| last.t - s.t < 1.0 && s.steps > 0);
         let (n, us) =

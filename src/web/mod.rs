@@ -262,7 +262,7 @@ impl WebApp {
         let assessment = session.assessor().map(|a| a.assessment(session.world()));
         let status = format!("{} · {}", state.backend, session.status());
         let frame = Frame {
-            world: session.world(),
+            world: &session.view,
             scene: &session.scene,
             tool: &state.hand.tool,
             timing: &session.timing,
@@ -392,9 +392,14 @@ fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let (ray, hit) = input::pick(&session.picker, &session.snapshot, &camera, &pointer);
     let mut out = Vec::new();
     if press {
-        state.hand.press(session.world(), &camera, ray, hit, &mut out);
+        // The browser steps its world in the frame loop: the grasp is resolved here at once.
+        if let Some(hit) = state.hand.press(&session.view, &camera, ray, hit, &mut out)
+            && let Some(e) = session.world().element_at(&hit)
+        {
+            session.queue(Command::GraspElement(e));
+        }
     } else {
-        state.hand.drag(session.world(), ray, hit, &mut out);
+        state.hand.drag(&session.view, ray, hit, &mut out);
     }
     for c in out {
         session.queue(c);

@@ -9,7 +9,7 @@ use web_time::Instant;
 use crate::instrument::{Command as InstrumentCommand, Picker};
 use crate::runner::{Episode, MetricsRecorder, Player, Source};
 use crate::scene::{Action as ScriptAction, Recording, Scene, Script};
-use crate::simulation::{Command, Snapshot, World};
+use crate::simulation::{Command, Snapshot, World, WorldView};
 use crate::training::Assessor;
 use crate::ui::{FrameSample, Timing};
 
@@ -62,6 +62,8 @@ pub struct Session {
     pub episode: Episode,
     /// What the renderer shows.
     pub snapshot: Snapshot,
+    /// What the panels show (the world's figures, refreshed with the snapshot).
+    pub view: WorldView,
     /// Ray casts against the snapshot.
     pub picker: Picker,
     picker_step: Option<u64>,
@@ -99,6 +101,7 @@ impl Session {
             scene,
             source: source.to_string(),
             label: label.to_string(),
+            view: episode.world().view(),
             episode,
             snapshot,
             picker: Picker::default(),
@@ -199,6 +202,7 @@ impl Session {
                 self.say(notice);
             }
             self.episode.snapshot_into(&mut self.snapshot);
+            self.episode.world().view_into(&mut self.view);
         }
         self.timing.push(FrameSample {
             t: self.started.elapsed().as_secs_f64(),

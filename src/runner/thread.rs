@@ -1,0 +1,491 @@
+//! The simulation thread: an [`Episode`] stepped on a thread of its own at its world's rate, each step
+//! started at its deadline (a native sleep finished by a short spin, `spin_sleep`), whatever the windows'
+//! frame rate. Native only: the browser has no threads here and steps its episode in the frame loop.
+//!
+//! Input reaches the thread through a channel ([`Input`], `crossbeam-channel`), each batch stamped with
+//! the step its sender last saw; the thread gives it to the world before its next step, and the
+//! episode's recorder writes it with the step it was given at, so a session recorded through the
+//! thread replays bit for bit however late the input came. The windows read the latest [`Published`]
+//! frame (snapshot, world view, assessment, pace) through a wait-free triple buffer (`triple_buffer`):
+//! the thread never waits for them, and refills the frame every sixtieth of a second (so a frame read
+//! is at most that old, plus a step). Messages for the window (a device dropped, a recording that
+//! stopped, a notice of the tissue) come back as [`Event`]s.
+//!
+//! Must not import wgpu, winit or egui.
+
+use std::path::PathBuf;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
+use hdrhistogram::Histogram;
+
+use super::Episode;
+use crate::haptics::HapticLink;
+use crate::instrument::{Command as InstrumentCommand, Hit};
+use crate::simulation::{Command, WorldView};
+use crate::snapshot::Snapshot;
+use crate::training::{Assessment, Report};
+
+/// How often the thread refills the published frame while it steps.
+pub const PUBLISH_EVERY: Duration = Duration::from_micros(16_667);
+/// How late the thread may fall before it gives up the steps it missed (it then runs behind real
+/// time, and says so, instead of running a burst of steps to catch up).
+pub const MAX_LAG: Duration = Duration::from_millis(50);
+/// How long an idle thread (paused, or a replay that has ended) waits for input between looks.
+const IDLE_WAIT: Duration = Duration::from_millis(20);
+
+/// One thing given to the world: a command, or a grasp to resolve against the world the thread has.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Given {
+    /// A command for the next step.
+    Command(Command),
+    /// Forceps: close on the element under a pick (resolved by [`World::element_at`] on the thread,
+    /// recorded as the element grasped).
+    ///
+    /// [`World::element_at`]: crate::simulation::World::element_at
+    GraspAt(Hit),
+}
+
+/// What the thread is told.
+pub enum Input {
+    /// What to give the world before its next step, in order; `seen` is the step of the last frame the
+    /// sender had read (the stamp: the thread counts how many steps late input comes).
+    Give {
+        /// The step the sender last saw.
+        seen: u64,
+        /// Commands and grasps, in the order given.
+        items: Vec<Given>,
+    },
+    /// A haptic device drives the instrument from the next step.
+    Haptic(HapticLink),
+    /// Replaces the episode (a reload or a restart): the old one comes back as [`Event::Replaced`],
+    /// with the haptic device moved to the new one.
+    Replace(Box<Episode>),
+    /// Asks for the session report now (scene title, date): it comes back as [`Event::Report`].
+    Report {
+        /// The scene's title.
+        title: String,
+        /// The date to write in it.
+        date: String,
+    },
+    /// Stops stepping (`true`) or goes on (`false`).
+    Pause(bool),
+}
+
+/// What the thread says back.
+pub enum Event {
+    /// The episode an [`Input::Replace`] replaced, to finish its recording.
+    Replaced(Box<Episode>),
+    /// A message for the window and the log.
+    Message(String),
+    /// The session report asked for, when the scene has goals.
+    Report(Option<Box<Report>>),
+}
+
+/// The pace the thread kept over the last full second (and, for the totals, since it started).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pace {
+    /// The world's rate, steps per second.
+    pub rate_hz: f64,
+    /// Steps run in the last full second.
+    pub steps_per_second: f32,
+    /// Worst deviation of the interval between two step starts from the step length, microseconds.
+    pub worst_jitter_us: f32,
+    /// Worst lateness of a step's start after its deadline, microseconds.
+    pub worst_late_us: f32,
+    /// 99th percentile of that lateness, microseconds.
+    pub p99_late_us: f32,
+    /// Mean step time, microseconds.
+    pub mean_step_us: f32,
+    /// Whether the thread gave up deadlines it could not keep in that second.
+    pub behind: bool,
+    /// Steps between the frame a batch of input was given on and the step it reached the world.
+    pub input_lag_steps: u64,
+    /// Steps run since the thread started (or since the episode was replaced).
+    pub total_steps: u64,
+    /// Their lateness summed, seconds.
+    pub total_late_s: f64,
+    /// 99th percentile of the lateness of all those steps, microseconds.
+    pub total_p99_late_us: f32,
+}
+
+/// The frame the windows read: the world as of a step, and what goes with it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Published {
+    /// The world's snapshot, to draw and pick against.
+    pub snapshot: Snapshot,
+    /// The world's figures for the panels.
+    pub view: WorldView,
+    /// The live assessment, when the scene has goals.
+    pub assessment: Option<Assessment>,
+    /// The thread's pace.
+    pub pace: Pace,
+    /// Commands recorded since recording began.
+    pub recorded: u64,
+    /// Where the episode records, if it does.
+    pub recording: Option<PathBuf>,
+    /// Whether a script or recording has played everything.
+    pub finished: bool,
+    /// Whether the thread is paused.
+    pub paused: bool,
+}
+
+impl Published {
+    /// Refills the frame from `episode` (reusing its allocations).
+    pub fn fill(&mut self, episode: &Episode) {
+        episode.snapshot_into(&mut self.snapshot);
+        episode.world().view_into(&mut self.view);
+        self.assessment = episode.assessor().map(|a| a.assessment(episode.world()));
+        self.recorded = episode.recorded();
+        self.recording = episode.recorder().map(|r| r.path().to_path_buf());
+        self.finished = episode.finished();
+    }
+}
+
+/// Lateness histograms: nanoseconds, up to ten seconds, two significant digits.
+fn histogram() -> Option<Histogram<u64>> {
+    Histogram::new_with_bounds(1, 10_000_000_000, 2).ok()
+}
+
+fn p99_us(h: Option<&Histogram<u64>>) -> f32 {
+    h.map_or(0.0, |h| h.value_at_quantile(0.99) as f32 * 1e-3)
+}
+
+/// Counts steps and their timing over one second at a time, and in total.
+#[derive(Debug)]
+struct PaceMeter {
+    period: Duration,
+    since: Instant,
+    steps: u32,
+    step_us: f64,
+    worst_jitter: Duration,
+    worst_late: Duration,
+    late: Option<Histogram<u64>>,
+    total_late: Option<Histogram<u64>>,
+    behind: bool,
+    last_start: Option<Instant>,
+    done: Pace,
+}
+
+impl PaceMeter {
+    fn new(period: Duration, rate_hz: f64) -> Self {
+        Self {
+            period,
+            since: Instant::now(),
+            steps: 0,
+            step_us: 0.0,
+            worst_jitter: Duration::ZERO,
+            worst_late: Duration::ZERO,
+            late: histogram(),
+            total_late: histogram(),
+            behind: false,
+            last_start: None,
+            done: Pace { rate_hz, ..Pace::default() },
+        }
+    }
+
+    fn step(&mut self, start: Instant, deadline: Instant, took: Duration) {
+        self.steps += 1;
+        self.step_us += took.as_secs_f64() * 1e6;
+        let late = start.saturating_duration_since(deadline);
+        self.worst_late = self.worst_late.max(late);
+        let ns = u64::try_from(late.as_nanos()).unwrap_or(u64::MAX).max(1);
+        for h in [self.late.as_mut(), self.total_late.as_mut()].into_iter().flatten() {
+            h.saturating_record(ns);
+        }
+        self.done.total_steps += 1;
+        self.done.total_late_s += late.as_secs_f64();
+        if let Some(last) = self.last_start {
+            let interval = start - last;
+            self.worst_jitter = self.worst_jitter.max(interval.abs_diff(self.period));
+        }
+        self.last_start = Some(start);
+        let elapsed = start - self.since;
+        if elapsed >= Duration::from_secs(1) {
+            let secs = elapsed.as_secs_f64();
+            self.done = Pace {
+                steps_per_second: (f64::from(self.steps) / secs) as f32,
+                worst_jitter_us: self.worst_jitter.as_secs_f32() * 1e6,
+                worst_late_us: self.worst_late.as_secs_f32() * 1e6,
+                p99_late_us: p99_us(self.late.as_ref()),
+                mean_step_us: (self.step_us / f64::from(self.steps.max(1))) as f32,
+                behind: self.behind,
+                total_p99_late_us: p99_us(self.total_late.as_ref()),
+                ..self.done
+            };
+            self.since = start;
+            self.steps = 0;
+            self.step_us = 0.0;
+            self.worst_jitter = Duration::ZERO;
+            self.worst_late = Duration::ZERO;
+            self.behind = false;
+            if let Some(h) = self.late.as_mut() {
+                h.reset();
+            }
+        }
+    }
+
+    /// The thread stopped stepping for a while (paused, idle): intervals across the pause are not jitter.
+    fn idle(&mut self) {
+        self.last_start = None;
+    }
+}
+
+/// An episode stepping on its own thread, and the ends of its channels.
+pub struct SimThread {
+    input: Sender<Input>,
+    events: Receiver<Event>,
+    output: triple_buffer::Output<Published>,
+    handle: Option<JoinHandle<Episode>>,
+}
+
+impl SimThread {
+    /// Starts stepping `episode` on a new thread named `dissect-sim`.
+    pub fn spawn(episode: Episode) -> std::io::Result<Self> {
+        let mut first = Published::default();
+        first.fill(&episode);
+        first.pace.rate_hz = episode.world().config().rate_hz;
+        let (publisher, output) = triple_buffer::triple_buffer(&first);
+        let (input, inputs) = crossbeam_channel::unbounded();
+        let (say, events) = crossbeam_channel::unbounded();
+        let handle = std::thread::Builder::new()
+            .name("dissect-sim".into())
+            .spawn(move || run(episode, &inputs, &say, publisher))?;
+        Ok(Self { input, events, output, handle: Some(handle) })
+    }
+
+    /// Sends the thread an input (dropped if the thread has ended).
+    pub fn send(&self, input: Input) {
+        let _ = self.input.send(input);
+    }
+
+    /// Gives the world `items` before its next step, stamped with the step last seen.
+    pub fn give(&self, items: Vec<Given>) {
+        if !items.is_empty() {
+            let seen = self.output.output_buffer().view.step_count();
+            self.send(Input::Give { seen, items });
+        }
+    }
+
+    /// Takes the latest published frame, if a newer one is there, and returns the current one.
+    pub fn latest(&mut self) -> &Published {
+        self.output.update();
+        self.output.output_buffer()
+    }
+
+    /// The frame last taken by [`SimThread::latest`] (no update).
+    pub fn current(&self) -> &Published {
+        self.output.output_buffer()
+    }
+
+    /// What the thread has said since the last call.
+    pub fn events(&self) -> Vec<Event> {
+        self.events.try_iter().collect()
+    }
+
+    /// Waits up to `timeout` for the next event.
+    pub fn wait_event(&self, timeout: Duration) -> Option<Event> {
+        self.events.recv_timeout(timeout).ok()
+    }
+
+    /// Stops the thread after its current step and returns the episode (`None` if the thread
+    /// panicked or was already stopped), with any events not yet read. The last frame taken stays
+    /// readable.
+    pub fn stop(&mut self) -> (Option<Episode>, Vec<Event>) {
+        // Closing the channel is the signal to stop.
+        let (dead, _) = crossbeam_channel::unbounded();
+        drop(std::mem::replace(&mut self.input, dead));
+        let episode = self.handle.take().and_then(|h| h.join().ok());
+        (episode, self.events.try_iter().collect())
+    }
+}
+
+impl Drop for SimThread {
+    fn drop(&mut self) {
+        if let Some(h) = self.handle.take() {
+            let (dead, _) = crossbeam_channel::unbounded();
+            drop(std::mem::replace(&mut self.input, dead));
+            let _ = h.join();
+        }
+    }
+}
+
+/// Hands an input to the episode.
+fn take(episode: &mut Episode, input: Input, say: &Sender<Event>, paused: &mut bool, lag: &mut u64) {
+    match input {
+        Input::Give { seen, items } => {
+            *lag = episode.world().step_count().saturating_sub(seen);
+            for item in items {
+                match item {
+                    Given::Command(c) => episode.push(c),
+                    Given::GraspAt(hit) => {
+                        if let Some(e) = episode.world().element_at(&hit) {
+                            episode.push(InstrumentCommand::GraspElement(e));
+                        }
+                    }
+                }
+            }
+        }
+        Input::Haptic(link) => episode.set_haptic(link),
+        Input::Replace(mut next) => {
+            if let Some(link) = episode.take_haptic() {
+                next.set_haptic(link);
+            }
+            let old = std::mem::replace(episode, *next);
+            let _ = say.send(Event::Replaced(Box::new(old)));
+        }
+        Input::Report { title, date } => {
+            let report = episode.assessor().map(|a| Box::new(a.report(episode.world(), &title, date)));
+            let _ = say.send(Event::Report(report));
+        }
+        Input::Pause(p) => *paused = p,
+    }
+}
+
+/// Says what the last step left to say.
+fn messages(episode: &mut Episode, say: &Sender<Event>) {
+    if let Some((path, e)) = episode.take_record_error() {
+        let _ = say.send(Event::Message(format!("recording stopped: {path}: {e}")));
+    }
+    if let Some(m) = episode.take_haptic_error() {
+        let _ = say.send(Event::Message(m));
+    }
+    if let Some(m) = episode.world_mut().tissue_mut().take_notice() {
+        let _ = say.send(Event::Message(m));
+    }
+}
+
+/// The thread's loop: inputs, wait for the deadline, step, publish now and then.
+fn run(
+    mut episode: Episode,
+    inputs: &Receiver<Input>,
+    say: &Sender<Event>,
+    mut publisher: triple_buffer::Input<Published>,
+) -> Episode {
+    let rate_hz = episode.world().config().rate_hz;
+    let mut period = Duration::from_secs_f64(1.0 / rate_hz);
+    let mut meter = PaceMeter::new(period, rate_hz);
+    let sleeper = spin_sleep::SpinSleeper::default();
+    let mut paused = false;
+    let mut lag = 0u64;
+    let mut deadline = Instant::now();
+    let mut last_publish: Option<Instant> = None;
+    let mut dirty = true;
+    loop {
+        loop {
+            match inputs.try_recv() {
+                Ok(input) => {
+                    let replace = matches!(input, Input::Replace(_));
+                    take(&mut episode, input, say, &mut paused, &mut lag);
+                    if replace {
+                        // A new world: its own rate, a fresh clock, a frame at once.
+                        let rate_hz = episode.world().config().rate_hz;
+                        period = Duration::from_secs_f64(1.0 / rate_hz);
+                        meter = PaceMeter::new(period, rate_hz);
+                        deadline = Instant::now();
+                        last_publish = None;
+                    }
+                    dirty = true;
+                }
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => return episode,
+            }
+        }
+        if paused || episode.finished() {
+            // Idle: show the last state, then wait for input without spinning.
+            if dirty {
+                publish(&mut publisher, &episode, &meter, paused, lag);
+                dirty = false;
+            }
+            meter.idle();
+            match inputs.recv_timeout(IDLE_WAIT) {
+                Ok(input) => {
+                    take(&mut episode, input, say, &mut paused, &mut lag);
+                    dirty = true;
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => return episode,
+            }
+            deadline = Instant::now();
+            continue;
+        }
+        sleeper.sleep_until(deadline);
+        let start = Instant::now();
+        let stepped = episode.step().is_some();
+        let end = Instant::now();
+        if stepped {
+            meter.step(start, deadline, end - start);
+            dirty = true;
+        }
+        messages(&mut episode, say);
+        deadline += period;
+        if end > deadline + MAX_LAG {
+            deadline = end;
+            meter.behind = true;
+        }
+        let due = last_publish.is_none_or(|t| end - t >= PUBLISH_EVERY);
+        if dirty && due {
+            publish(&mut publisher, &episode, &meter, paused, lag);
+            last_publish = Some(end);
+            dirty = false;
+        }
+    }
+}
+
+fn publish(
+    publisher: &mut triple_buffer::Input<Published>,
+    episode: &Episode,
+    meter: &PaceMeter,
+    paused: bool,
+    lag: u64,
+) {
+    let frame = publisher.input_buffer_mut();
+    frame.fill(episode);
+    frame.pace =
+        Pace { input_lag_steps: lag, total_p99_late_us: p99_us(meter.total_late.as_ref()), ..meter.done };
+    frame.paused = paused;
+    publisher.publish();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::runner::Source;
+    use crate::scene::{DEFAULT_SCENE, DEFAULT_SCENE_PATH, Scene};
+
+    fn episode() -> Episode {
+        let scene = Scene::from_str(DEFAULT_SCENE, DEFAULT_SCENE_PATH).expect("scene");
+        let world = scene.build_world(false).expect("world");
+        Episode::new(world, None, Source::Live)
+    }
+
+    #[test]
+    fn the_thread_steps_on_its_own_and_publishes() {
+        let mut sim = SimThread::spawn(episode()).expect("thread");
+        sim.give(vec![Given::Command(InstrumentCommand::MoveTo([0.0, 0.02, 0.0]).into())]);
+        let t = Instant::now();
+        while sim.latest().view.step_count() < 50 {
+            assert!(t.elapsed() < Duration::from_secs(20), "the thread does not step");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let (episode, _) = sim.stop();
+        let episode = episode.expect("the thread ended cleanly");
+        assert!(episode.world().step_count() >= 50);
+        assert_eq!(episode.world().instrument().target, [0.0, 0.02, 0.0]);
+    }
+
+    #[test]
+    fn a_paused_thread_does_not_step() {
+        let mut sim = SimThread::spawn(episode()).expect("thread");
+        sim.send(Input::Pause(true));
+        std::thread::sleep(Duration::from_millis(100));
+        let a = sim.latest().view.step_count();
+        std::thread::sleep(Duration::from_millis(100));
+        let b = sim.latest().view.step_count();
+        assert_eq!(a, b);
+        assert!(sim.latest().paused);
+        let (episode, _) = sim.stop();
+        assert_eq!(episode.map(|e| e.world().step_count()), Some(b));
+    }
+}
