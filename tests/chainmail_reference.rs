@@ -1,6 +1,7 @@
 //! The engine's fast paths against a plain reference: a straightforward chain reaction (Gibson's per-direction
 //! candidate lists of `(candidate, link, sponsor)` entries, each checked against its sponsor through the link's box,
-//! bisection when a fixed element blocks) and a straightforward Jacobi sweep, both written here with
+//! from one source or several; when a fixed element blocks, the move shortened by what the fixed elements would have
+//! had to move, then bisected) and a straightforward Jacobi sweep, both written here with
 //! the public API only. On random grids, wrapped grids and irregular link lists, with pins, holds, cuts
 //! and two materials, the engine must give the same positions (compared with `==`), the same moved
 //! elements in the same order, and the same sponsors.
@@ -38,23 +39,23 @@ fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-/// The reference chain reaction on `pos`: `Some((moved, sponsors))` or `None` (rolled back).
+/// How a reference chain reaction ended: the elements moved and their sponsors, or blocked with the
+/// most any fixed element would have had to move, per coordinate (rolled back).
+type Reaction = Result<(Vec<usize>, Vec<usize>), [f32; 3]>;
+
+/// The reference chain reaction on `pos` from `seeds` (element, goal), each its own sponsor. A blocked
+/// reaction runs to its end (fixed elements stay) and is rolled back.
 fn reference_reaction(
     body: &Body,
     pos: &mut [[f32; 3]],
-    src: usize,
-    goal: [f32; 3],
+    seeds: &[(usize, [f32; 3])],
     m: [bool; 3],
-) -> Option<(Vec<usize>, Vec<usize>)> {
+) -> Reaction {
     let lat = body.lattice();
     let n = pos.len();
     let mut moved_flag = vec![false; n];
     let mut old = vec![[0.0f32; 3]; n];
-    let mut moved = vec![src];
-    let mut sponsors = vec![src];
-    old[src] = pos[src];
-    pos[src] = goal;
-    moved_flag[src] = true;
+    let (mut moved, mut sponsors) = (Vec::new(), Vec::new());
     // Gibson's candidate lists, one per direction (the index of the link in an element's adjacency).
     let width = (0..n).map(|i| lat.neighbours(ElementId(i as u32)).count()).max().unwrap_or(0);
     let mut lists: Vec<Vec<(usize, LinkId, usize)>> = vec![Vec::new(); width];
@@ -65,7 +66,22 @@ fn reference_reaction(
             }
         }
     };
-    push(&mut lists, &moved_flag, src);
+    for &(src, goal) in seeds {
+        if moved_flag[src] {
+            continue;
+        }
+        old[src] = pos[src];
+        pos[src] = goal;
+        moved_flag[src] = true;
+        moved.push(src);
+        sponsors.push(src);
+    }
+    // Every seed enters the lists before any candidate is checked (a seed's neighbour that is
+    // another seed has moved already).
+    for &src in &moved.clone() {
+        push(&mut lists, &moved_flag, src);
+    }
+    let mut excess: Option<[f32; 3]> = None;
     let mut heads = vec![0usize; width];
     loop {
         let mut progressed = false;
@@ -103,10 +119,11 @@ fn reference_reaction(
                     let scale = (hi[0] - lo[0]).abs().max((hi[1] - lo[1]).abs()).max((hi[2] - lo[2]).abs())
                         + (lo[0].abs() + lo[1].abs() + lo[2].abs());
                     if dist(q, pc) > dist(before, pc) + 1e-5 * scale {
-                        for &i in &moved {
-                            pos[i] = old[i];
+                        // How much further than before the fixed element would have to go.
+                        let x = excess.get_or_insert([0.0; 3]);
+                        for k in 0..3 {
+                            x[k] = x[k].max(((q[k] - pc[k]).abs() - (before[k] - pc[k]).abs()).max(0.0));
                         }
-                        return None;
                     }
                     continue;
                 }
@@ -122,10 +139,16 @@ fn reference_reaction(
             break;
         }
     }
-    Some((moved, sponsors))
+    if let Some(x) = excess {
+        for &i in &moved {
+            pos[i] = old[i];
+        }
+        return Err(x);
+    }
+    Ok((moved, sponsors))
 }
 
-/// The reference deformation: returns `(fraction, moved, sponsors)`.
+/// The reference deformation of one element: returns `(fraction, moved, sponsors)`.
 fn reference_deform(
     body: &Body,
     pos: &mut [[f32; 3]],
@@ -133,28 +156,77 @@ fn reference_deform(
     target: [f32; 3],
     pass: Pass,
 ) -> (f32, Vec<usize>, Vec<usize>) {
+    reference_group(body, pos, &[(src, target)], pass)
+}
+
+/// The reference deformation of a group, each seed toward its target: the whole move if nothing
+/// blocks; else the share at which the fixed elements would just stay (the move cut by the most a
+/// fixed element would have had to go, over the largest move of a seed), tried up to three times,
+/// nothing when it leaves no room, and bisection after that. Returns `(fraction, moved, sponsors)`.
+fn reference_group(
+    body: &Body,
+    pos: &mut [[f32; 3]],
+    seeds: &[(usize, [f32; 3])],
+    pass: Pass,
+) -> (f32, Vec<usize>, Vec<usize>) {
     let m = mask(pass);
-    let start = pos[src];
-    let goal = [0, 1, 2].map(|k| if m[k] { target[k] } else { start[k] });
-    if body.is_pinned(ElementId(src as u32)) || goal == start {
+    let mut free = Vec::new();
+    let mut delta = [0.0f32; 3];
+    for &(e, target) in seeds {
+        let start = pos[e];
+        let goal = [0, 1, 2].map(|k| if m[k] { target[k] } else { start[k] });
+        if !body.is_pinned(ElementId(e as u32)) && goal != start {
+            free.push((e, start, goal));
+            for k in 0..3 {
+                delta[k] = delta[k].max((goal[k] - start[k]).abs());
+            }
+        }
+    }
+    if free.is_empty() {
         return (0.0, vec![], vec![]);
     }
-    let at = |t: f32| if t >= 1.0 { goal } else { [0, 1, 2].map(|k| start[k] + t * (goal[k] - start[k])) };
-    if let Some((mv, sp)) = reference_reaction(body, pos, src, goal, m) {
-        return (1.0, mv, sp);
-    }
+    let size = delta.iter().fold(0.0f32, |a, &d| a.max(d));
+    let at = |t: f32| -> Vec<(usize, [f32; 3])> {
+        free.iter()
+            .map(|&(e, s, g)| (e, if t >= 1.0 { g } else { [0, 1, 2].map(|k| s[k] + t * (g[k] - s[k])) }))
+            .collect()
+    };
+    let cut =
+        |x: [f32; 3]| (0..3).filter(|&k| delta[k] > 0.0).map(|k| x[k] / delta[k]).fold(0.0f32, f32::max);
+    let mut next = match reference_reaction(body, pos, &at(1.0), m) {
+        Ok((mv, sp)) => return (1.0, mv, sp),
+        Err(x) => 1.0 - cut(x),
+    };
     let (mut lo, mut hi) = (0.0f32, 1.0f32);
+    for _ in 0..3 {
+        if next >= hi {
+            break;
+        }
+        if (next - lo) * size <= 1e-7 {
+            return (0.0, vec![], vec![]);
+        }
+        match reference_reaction(body, pos, &at(next), m) {
+            Ok((mv, sp)) => return (next, mv, sp),
+            Err(x) => {
+                hi = next;
+                next = (next - cut(x)).min(hi);
+            }
+        }
+    }
     for _ in 0..20 {
+        if (hi - lo) * size <= 1e-7 {
+            break;
+        }
         let mid = 0.5 * (lo + hi);
         let mut trial = pos.to_vec();
-        if reference_reaction(body, &mut trial, src, at(mid), m).is_some() {
+        if reference_reaction(body, &mut trial, &at(mid), m).is_ok() {
             lo = mid;
         } else {
             hi = mid;
         }
     }
     if lo > 0.0
-        && let Some((mv, sp)) = reference_reaction(body, pos, src, at(lo), m)
+        && let Ok((mv, sp)) = reference_reaction(body, pos, &at(lo), m)
     {
         return (lo, mv, sp);
     }
@@ -364,8 +436,20 @@ proptest! {
             let pass = [Pass::All, Pass::Plane, Pass::Normal][pass as usize];
             let p = pos[e as usize];
             let target = [p[0] + d[0], p[1] + d[1], p[2] + d[2]];
-            let r = body.deform(&mut ws, ElementId(e), target, pass).expect("deform");
-            let (fraction, moved, sponsors) = reference_deform(&body, &mut pos, e as usize, target, pass);
+            let (r, (fraction, moved, sponsors)) = if step % 3 == 2 {
+                // A group: the element and its neighbours, each moved by a third of the move.
+                let mut ids = vec![ElementId(e)];
+                ids.extend(body.lattice().neighbours(ElementId(e)).map(|(n, _)| n));
+                ids.dedup();
+                let goals: Vec<[f32; 3]> =
+                    ids.iter().map(|i| { let q = pos[i.index()]; [0, 1, 2].map(|k| q[k] + d[k] / 3.0) }).collect();
+                let r = body.deform_group(&mut ws, &ids, &goals, pass).expect("group");
+                let seeds: Vec<(usize, [f32; 3])> = ids.iter().map(|i| i.index()).zip(goals).collect();
+                (r, reference_group(&body, &mut pos, &seeds, pass))
+            } else {
+                let r = body.deform(&mut ws, ElementId(e), target, pass).expect("deform");
+                (r, reference_deform(&body, &mut pos, e as usize, target, pass))
+            };
             prop_assert_eq!(r.fraction, fraction);
             prop_assert!(same(body.positions(), &pos), "positions differ after deformation {}", step);
             let got: Vec<usize> = ws.moved().map(|m| m.index()).collect();

@@ -64,6 +64,7 @@ pub(crate) use lattice::SIDE_B as SIDE_B_BIT;
 pub use lattice::{Axis, BYTES_PER_ELEMENT, GridSpec, Lattice, LinkSpec, MAX_ELEMENTS};
 pub use material::{DEFAULT_THICKNESS, DEFAULT_TOUGHNESS, DEFAULT_YOUNG_MODULUS, Limits, Material};
 pub use reaction::{Deformation, Pass};
+pub(crate) use relax::sweeps_within;
 pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};
 pub use simd::{SIMD_ENV, SimdLevel};
 pub use workspace::Workspace;

@@ -25,6 +25,14 @@ pub struct Workspace {
     pub(crate) lists: Vec<u32>,
     /// Heads and tails of the candidate lists for widths without a specialised path.
     pub(crate) list_ends: Vec<usize>,
+    /// A deformation's seeds: their ids and goals as asked, the ones that move, where those started,
+    /// their goals, and their goals at a share of the move.
+    pub(crate) seeds: Vec<u32>,
+    pub(crate) seed_full: Vec<[f32; 3]>,
+    pub(crate) seed_free: Vec<u32>,
+    pub(crate) seed_starts: Vec<[f32; 3]>,
+    pub(crate) seed_goals: Vec<[f32; 3]>,
+    pub(crate) seed_at: Vec<[f32; 3]>,
     /// Relaxation's second buffer.
     pub(crate) next: Vec<[f32; 3]>,
     /// The grid tables of the body last fitted (`None` for other lattices), and the body's

@@ -111,6 +111,13 @@ impl Player {
     fn select(&mut self, world: &mut World, kind: InstrumentKind) {
         world.push(Command::Select(kind));
         self.kind = Some(kind);
+        // Forceps taken back up where they hold the tissue: the next move starts there, not where
+        // the last instrument was (the world puts the forceps' target on what they hold).
+        if kind == InstrumentKind::Forceps
+            && let Some(p) = world.instrument().grasped.and_then(|e| world.tissue().world_position(e))
+        {
+            self.tip = Some(p);
+        }
     }
 
     fn move_to(&mut self, world: &mut World, p: [f32; 3]) {

@@ -502,7 +502,16 @@ impl Tissue {
     ) -> Self {
         let n = body.element_count();
         let (extent_lo, extent_span) = fraction_extent(&geometry, body.lattice().rest_positions());
+        let mut kind_links: Vec<(LinkKind, Vec<u32>)> = Vec::new();
+        for (l, &kind) in link_kind.iter().enumerate() {
+            match kind_links.iter_mut().find(|(k, _)| *k == kind) {
+                Some((_, ids)) => ids.push(l as u32),
+                None => kind_links.push((kind, vec![l as u32])),
+            }
+        }
         let mut tissue = Tissue {
+            kind_links,
+            tear_scratch: Vec::new(),
             ws: Workspace::new(&body),
             extent_lo,
             extent_span,

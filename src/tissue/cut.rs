@@ -121,11 +121,18 @@ impl Tissue {
                 // Fibres whose middle lies within the blade's half-width of the stroke (metres, the
                 // same at every element spacing).
                 let reach = self.blade_half_width;
-                for l in 0..self.body.link_count() {
-                    if self.link_kind[l] != want {
-                        continue;
-                    }
-                    let id = LinkId(l as u32);
+                // Only links that come within the blade's reach of the stroke's bounding box can be hit.
+                let slack = reach;
+                let (lo, hi) = (
+                    [a2[0].min(b2[0]) - slack, a2[1].min(b2[1]) - slack],
+                    [a2[0].max(b2[0]) + slack, a2[1].max(b2[1]) + slack],
+                );
+                let ids = match self.kind_links.iter().position(|(k, _)| *k == want) {
+                    Some(i) => std::mem::take(&mut self.kind_links[i].1),
+                    None => return 0,
+                };
+                for &l in &ids {
+                    let id = LinkId(l);
                     if !self.body.link_intact(id) {
                         continue;
                     }
@@ -139,6 +146,13 @@ impl Tissue {
                     let shift = period.map(|p| ((mid_u - pa[0]) / p).round() * p).unwrap_or(0.0);
                     let p = [pa[0] + shift, pa[1]];
                     let q = [p[0] + off[0], p[1] + off[1]];
+                    if p[0].max(q[0]) < lo[0]
+                        || p[0].min(q[0]) > hi[0]
+                        || p[1].max(q[1]) < lo[1]
+                        || p[1].min(q[1]) > hi[1]
+                    {
+                        continue;
+                    }
                     let hit = if want == LinkKind::Connective {
                         point_segment_dist([0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])], a2, b2) <= reach
                     } else {
@@ -147,6 +161,9 @@ impl Tissue {
                     if hit && self.break_link(id, BreakReason::Cut) {
                         cut += 1;
                     }
+                }
+                if let Some(i) = self.kind_links.iter().position(|(k, _)| *k == want) {
+                    self.kind_links[i].1 = ids;
                 }
             }
             Geometry::Volume => {

@@ -13,6 +13,9 @@ pub(crate) struct Jaws {
     pub(crate) held: Vec<(ElementId, [f32; 3])>,
     /// Walk queue and visit marks, kept so that a grasp does not allocate once warmed up.
     queue: Vec<u32>,
+    /// The held ids but the centre, and their goals, as a pull passes them to the chain reaction.
+    ids: Vec<ElementId>,
+    goals: Vec<[f32; 3]>,
     seen: Vec<bool>,
 }
 
@@ -91,37 +94,46 @@ impl Tissue {
     }
 
     /// One pass of a jaw pull: the centre goes toward `t` (lattice coordinates) as far as the tissue
-    /// allows, then every other held element toward the centre's new position plus its offset. The
-    /// held elements are let go of during the pass so that they do not block each other's chain
-    /// reactions. Returns the elements moved and the smallest share of a requested move allowed.
+    /// allows, in a chain reaction of its own (the other held elements let go of meanwhile, so that
+    /// they follow it within their links' limits), then the rest of the jaws toward the centre's new
+    /// position plus their offsets, together, in one chain reaction started from all of them (what
+    /// is left of their moves is small by then). Returns the elements moved and the smallest share
+    /// of a requested move allowed.
     pub(crate) fn pull_jaws(&mut self, t: [f32; 3], pass: Pass) -> (u32, f32) {
+        let Some(&(centre, _)) = self.jaws.held.first() else { return (0, 1.0) };
         let held = std::mem::take(&mut self.jaws.held);
         for &(i, _) in &held {
             let _ = self.body.set_held(i, false);
         }
         let (mut moved, mut fraction) = (0u32, 1.0f32);
-        if let Some(&(centre, _)) = held.first() {
-            if let Ok(d) = self.body.deform(&mut self.ws, centre, t, pass) {
-                moved += d.moved;
-                fraction = d.fraction;
-                self.activate_moved();
+        if let Ok(d) = self.body.deform(&mut self.ws, centre, t, pass) {
+            moved += d.moved;
+            fraction = d.fraction;
+            self.activate_moved();
+        }
+        let c = self.body.position(centre).unwrap_or(t);
+        let (mut ids, mut goals) = (std::mem::take(&mut self.jaws.ids), std::mem::take(&mut self.jaws.goals));
+        ids.clear();
+        goals.clear();
+        for &(i, off) in &held[1..] {
+            ids.push(i);
+            goals.push([c[0] + off[0], c[1] + off[1], c[2] + off[2]]);
+        }
+        // The centre holds still while the rest catch up with it.
+        let _ = self.body.set_held(centre, true);
+        if let Ok(d) = self.body.deform_group(&mut self.ws, &ids, &goals, pass) {
+            moved += d.moved;
+            if d.attempts > 0 {
+                fraction = fraction.min(d.fraction);
             }
-            let c = self.body.position(centre).unwrap_or(t);
-            for &(i, off) in &held[1..] {
-                let goal = [c[0] + off[0], c[1] + off[1], c[2] + off[2]];
-                if let Ok(d) = self.body.deform(&mut self.ws, i, goal, pass) {
-                    moved += d.moved;
-                    if d.attempts > 0 {
-                        fraction = fraction.min(d.fraction);
-                    }
-                    self.activate_moved();
-                }
-            }
+            self.activate_moved();
         }
         for &(i, _) in &held {
             let _ = self.body.set_held(i, true);
         }
         self.jaws.held = held;
+        self.jaws.ids = ids;
+        self.jaws.goals = goals;
         (moved, fraction)
     }
 }

@@ -142,6 +142,10 @@ pub struct Tissue {
     pub(crate) geometry: Geometry,
     pub(crate) layers: Vec<Layer>,
     pub(crate) link_kind: Vec<LinkKind>,
+    /// The links of each kind, in id order (a cut looks only at the kind its depth reaches).
+    pub(crate) kind_links: Vec<(LinkKind, Vec<u32>)>,
+    /// Scratch of the tear check: each material's tear ratio, squared.
+    pub(crate) tear_scratch: Vec<Option<f32>>,
     /// World rest length of each link, metres (for stretch and tearing).
     pub(crate) rest_len: Vec<f32>,
     /// Elements per layer sheet (`nu × nv`) for layered tissue; pairs across layers differ by this.
@@ -552,8 +556,12 @@ impl Tissue {
         if self.is_fem() {
             return 0;
         }
+        // Each material's tear ratio, squared (lengths are compared squared: no root per link).
+        let mut tear2 = std::mem::take(&mut self.tear_scratch);
+        tear2.clear();
+        tear2.extend(self.body.materials().iter().map(|m| m.tear_ratio.map(|r| r * r)));
         let mut torn = 0;
-        let mut max_stretch = 0.0f32;
+        let mut max_stretch2 = 0.0f32;
         let count = self.active.len();
         for k in 0..count {
             let e = self.active[k].index();
@@ -561,6 +569,7 @@ impl Tissue {
                 let lat = self.body.lattice();
                 (lat.adj_start[e] as usize, lat.adj_start[e + 1] as usize)
             };
+            let Some(pa) = self.world_position(ElementId(e as u32)) else { continue };
             for s in s0..s1 {
                 let raw = self.body.lattice().adj_link[s];
                 if raw & crate::chainmail::SIDE_B_BIT != 0 {
@@ -570,16 +579,17 @@ impl Tissue {
                 if !self.body.link_intact(l) {
                     continue;
                 }
-                let stretch = self.world_stretch(l);
+                let b = ElementId(self.body.lattice().adj_nbr[s]);
+                let Some(pb) = self.world_position(b) else { continue };
+                let rest = self.rest_len[l.index()].max(f32::MIN_POSITIVE);
+                let stretch2 = Vec3::from(pb).distance_squared(Vec3::from(pa)) / (rest * rest);
                 // The force proxy is the layers' stretch: fibres are meant to stretch before they are cut.
                 if matches!(self.link_kind[l.index()], LinkKind::Layer(_)) {
-                    max_stretch = max_stretch.max(stretch);
+                    max_stretch2 = max_stretch2.max(stretch2);
                 }
-                let Some(m) = self.body.link_material(l).and_then(|m| self.body.material(m)) else {
-                    continue;
-                };
-                if let Some(ratio) = m.tear_ratio
-                    && stretch > ratio
+                let ratio2 = self.body.link_material(l).and_then(|m| tear2.get(m.index()).copied().flatten());
+                if let Some(ratio2) = ratio2
+                    && stretch2 > ratio2
                     && self.break_link(l, BreakReason::Tear)
                 {
                     torn += 1;
@@ -587,8 +597,9 @@ impl Tissue {
             }
         }
         if count > 0 {
-            self.max_stretch = max_stretch;
+            self.max_stretch = max_stretch2.sqrt();
         }
+        self.tear_scratch = tear2;
         torn
     }
 

@@ -4,8 +4,6 @@
 //! the elements that still move (more than [`SETTLED`]) and their neighbours, so it shrinks again as
 //! the tissue settles, and relaxation, contact and the tear check cost what is still moving.
 
-use std::time::Instant;
-
 use super::Tissue;
 use crate::chainmail::{RelaxBudget, RelaxReport};
 
@@ -20,69 +18,24 @@ impl Tissue {
     pub(crate) fn relax_region(&mut self, budget: RelaxBudget) -> RelaxReport {
         self.ws.fit(&self.body);
         self.last_move.resize(self.body.element_count(), 0.0);
-        let started = budget.max_time.map(|_| Instant::now());
-        let mut report = RelaxReport::default();
-        while report.sweeps < budget.max_sweeps {
+        let (body, active, last_move) = (&mut self.body, &self.active, &mut self.last_move);
+        crate::chainmail::sweeps_within(budget, || {
             let mut change = 0.0f32;
-            for &e in &self.active {
+            for &e in active {
                 let i = e.index();
-                let p = self.body.pos[i];
-                let q = self.body.relaxed_unless_fixed(i);
-                let q = self.clamped_to_boxes(i, q);
+                let p = body.pos[i];
+                let q = body.relaxed_into_boxes(i);
                 let m = (q[0] - p[0]).abs().max((q[1] - p[1]).abs()).max((q[2] - p[2]).abs());
-                self.last_move[i] = m;
+                last_move[i] = m;
                 change = change.max(m);
                 // In place (Gauss-Seidel): the element is kept inside its links' boxes around its
                 // neighbours' current positions, so links that hold keep holding. A Jacobi sweep
                 // moves both ends of a link at once, each within the box around the other's old
                 // position, and can leave the link outside its limits.
-                self.body.pos[i] = q;
+                body.pos[i] = q;
             }
-            report.sweeps += 1;
-            report.last_change = change;
-            if change <= budget.tolerance {
-                report.converged = true;
-                break;
-            }
-            if let (Some(t0), Some(limit)) = (started, budget.max_time)
-                && t0.elapsed() >= limit
-            {
-                break;
-            }
-        }
-        report
-    }
-
-    /// `q` moved into the intersection of element `i`'s link boxes around its neighbours' current
-    /// positions, coordinate by coordinate, where that intersection is not empty (fixed elements stay
-    /// where they are). The chain reaction keeps each element within its sponsor's box but not always
-    /// within a box of a neighbour moved along another path (a layer pushed through the fibres at
-    /// several places at once); this repairs such links as the sweeps go.
-    #[inline]
-    fn clamped_to_boxes(&self, i: usize, q: [f32; 3]) -> [f32; 3] {
-        let b = &self.body;
-        let e = crate::chainmail::ElementId(i as u32);
-        if b.is_pinned(e) || b.is_held(e) {
-            return q;
-        }
-        let w = b.width;
-        let (mut lo, mut hi) = ([f32::NEG_INFINITY; 3], [f32::INFINITY; 3]);
-        for t in i * w..(i + 1) * w {
-            let j = b.slot_nbr[t] as usize;
-            let [blo, bhi] = b.classes[b.slot_class[t] as usize].bounds;
-            let pj = b.pos[j];
-            for c in 0..3 {
-                lo[c] = lo[c].max(pj[c] + blo[c]);
-                hi[c] = hi[c].min(pj[c] + bhi[c]);
-            }
-        }
-        let mut out = q;
-        for c in 0..3 {
-            if lo[c] <= hi[c] {
-                out[c] = out[c].clamp(lo[c], hi[c]);
-            }
-        }
-        out
+            change
+        })
     }
 
     /// Shrinks the disturbed region to the elements still moving and their neighbours (elements put

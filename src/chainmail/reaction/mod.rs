@@ -44,8 +44,16 @@ impl Pass {
     }
 }
 
-/// How many times a blocked deformation is halved while searching for the largest one allowed.
+/// Most times a blocked deformation is halved while searching for the largest one allowed (the
+/// search stops sooner once the interval is under [`BISECT_TOLERANCE`]).
 const BISECT_STEPS: u32 = 20;
+
+/// A bisection stops once the source's move is known to within this (lattice units: metres on
+/// tissue; a tenth of a micrometre, far below what a trainee sees or an instrument feels).
+const BISECT_TOLERANCE: f32 = 1e-7;
+
+/// Most estimates tried from a blocked reaction's measured excess before bisecting.
+const ESTIMATES: u32 = 3;
 
 /// What a deformation did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,11 +70,22 @@ pub struct Deformation {
     pub attempts: u32,
 }
 
+/// How a chain reaction ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Outcome {
+    /// Every element that had to move moved; the moves stay.
+    Done,
+    /// A fixed element would have had to move: everything was rolled back. When the reaction was
+    /// run to the end to measure it, `excess` is the most any fixed element would have had to move,
+    /// per coordinate (else zeros).
+    Blocked { excess: [f32; 3] },
+}
+
 impl Body {
     /// Moves element `source` towards `target` (lattice coordinates) and lets the chain reaction
     /// carry its neighbours. If the move would have to displace a pinned or held element, it is rolled
-    /// back and the largest permissible fraction is found by bisection; the result says how far the
-    /// source really went. Every element moves at most once.
+    /// back and the largest permissible fraction is found (see [`Body::deform_group`]); the result
+    /// says how far the source really went. Every element moves at most once.
     pub fn deform(
         &mut self,
         ws: &mut Workspace,
@@ -78,7 +97,6 @@ impl Body {
         for &x in &target {
             finite("deformation target", x)?;
         }
-        ws.fit(self);
         let start = self.pos[source.index()];
         let mask = pass.mask();
         let mut goal = start;
@@ -87,27 +105,171 @@ impl Body {
                 goal[k] = target[k];
             }
         }
-        let mut result =
-            Deformation { requested: goal, achieved: start, fraction: 0.0, moved: 0, attempts: 0 };
-        if self.flags[source.index()] & PINNED != 0 || goal == start {
-            ws.next_generation();
-            return Ok(result);
+        let result = self.deform_seeds(ws, &[source.0], &[goal], mask);
+        Ok(result)
+    }
+
+    /// Moves every element of `sources` to its goal in `goals` (lattice coordinates, the coordinates
+    /// `pass` leaves alone ignored) in one chain reaction started from all of them at once, so that
+    /// they never block one another (the rest of a forceps' jaws, once the centre has moved). Pinned
+    /// sources stay. Gibson's order keeps a chain reaction within every link's limits when it starts
+    /// from one element; from several, an element reached from one source is not checked again
+    /// against another, so use this for small moves (each source's within its links' slack).
+    /// If a pinned or held element outside the group would have to move, the moves are shortened
+    /// together, as [`Body::deform`] shortens one. The result is the first source's.
+    pub fn deform_group(
+        &mut self,
+        ws: &mut Workspace,
+        sources: &[ElementId],
+        goals: &[[f32; 3]],
+        pass: Pass,
+    ) -> Result<Deformation, ChainMailError> {
+        for &e in sources {
+            self.check_element(e)?;
         }
-        let at = |t: f32| -> [f32; 3] {
-            if t >= 1.0 { goal } else { [0, 1, 2].map(|k| start[k] + t * (goal[k] - start[k])) }
+        for g in goals {
+            for &x in g {
+                finite("deformation target", x)?;
+            }
+        }
+        let mask = pass.mask();
+        let mut seeds = std::mem::take(&mut ws.seeds);
+        let mut full = std::mem::take(&mut ws.seed_full);
+        seeds.clear();
+        full.clear();
+        for (e, g) in sources.iter().zip(goals) {
+            let p = self.pos[e.index()];
+            seeds.push(e.0);
+            full.push([0, 1, 2].map(|k| if mask[k] { g[k] } else { p[k] }));
+        }
+        let result = self.deform_seeds(ws, &seeds, &full, mask);
+        ws.seeds = seeds;
+        ws.seed_full = full;
+        Ok(result)
+    }
+
+    /// The search behind [`Body::deform`] and [`Body::deform_group`]: each seed's goal at the full
+    /// move in `full` (masked already); a share `t` of the move takes each seed `t` of its way.
+    fn deform_seeds(
+        &mut self,
+        ws: &mut Workspace,
+        seeds: &[u32],
+        full: &[[f32; 3]],
+        mask: [bool; 3],
+    ) -> Deformation {
+        ws.fit(self);
+        let Some(&first) = seeds.first() else {
+            ws.next_generation();
+            return Deformation {
+                requested: [0.0; 3],
+                achieved: [0.0; 3],
+                fraction: 0.0,
+                moved: 0,
+                attempts: 0,
+            };
+        };
+        let start = self.pos[first as usize];
+        let requested = full.first().copied().unwrap_or(start);
+        let mut result = Deformation { requested, achieved: start, fraction: 0.0, moved: 0, attempts: 0 };
+        // Pinned seeds cannot move; nothing to do if none is free or the move is nothing.
+        let mut starts = std::mem::take(&mut ws.seed_starts);
+        starts.clear();
+        let mut free = std::mem::take(&mut ws.seed_free);
+        free.clear();
+        let mut goals = std::mem::take(&mut ws.seed_goals);
+        goals.clear();
+        // The largest move of any seed, per coordinate (what a measured excess is set against).
+        let mut delta = [0.0f32; 3];
+        for (&s, g) in seeds.iter().zip(full) {
+            let p = self.pos[s as usize];
+            if self.flags[s as usize] & PINNED == 0 && *g != p {
+                free.push(s);
+                starts.push(p);
+                goals.push(*g);
+                for k in 0..3 {
+                    delta[k] = delta[k].max((g[k] - p[k]).abs());
+                }
+            }
+        }
+        let mut full_goals = goals;
+        if free.is_empty() {
+            ws.next_generation();
+            full_goals.clear();
+            return self.finish_seeds(ws, result, starts, free, full_goals);
+        }
+        let size = delta.iter().fold(0.0f32, |m, d| m.max(*d));
+        // The seeds' goals at a share `t` of the move (exactly the goals at the full move).
+        let mut goals = std::mem::take(&mut ws.seed_at);
+        let mut attempt = |body: &mut Body, ws: &mut Workspace, t: f32, measure: bool| -> Outcome {
+            if t >= 1.0 {
+                return body.chain_reaction(ws, &free, &full_goals, mask, measure);
+            }
+            goals.clear();
+            for (p, g) in starts.iter().zip(&full_goals) {
+                goals.push([0, 1, 2].map(|c| p[c] + t * (g[c] - p[c])));
+            }
+            body.chain_reaction(ws, &free, &goals, mask, measure)
+        };
+        // The share of the move at which the fixed elements of a blocked reaction would just stay.
+        let estimate = |t: f32, excess: [f32; 3]| -> f32 {
+            let mut cut = 0.0f32;
+            for k in 0..3 {
+                if delta[k] > 0.0 {
+                    cut = cut.max(excess[k] / delta[k]);
+                }
+            }
+            t - cut
+        };
+        let done = |result: &mut Deformation, ws: &Workspace, t: f32, body: &Body| {
+            result.achieved = body.pos[first as usize];
+            result.fraction = t.min(1.0);
+            result.moved = ws.moved.len() as u32;
         };
         result.attempts = 1;
-        if self.chain_reaction(ws, source.index(), goal, mask) {
-            result.achieved = goal;
-            result.fraction = 1.0;
-            result.moved = ws.moved.len() as u32;
-            return Ok(result);
+        let mut hi = 1.0f32;
+        let mut lo = 0.0f32;
+        let mut next = match attempt(self, ws, 1.0, true) {
+            Outcome::Done => {
+                done(&mut result, ws, 1.0, self);
+                ws.seed_at = goals;
+                return self.finish_seeds(ws, result, starts, free, full_goals);
+            }
+            Outcome::Blocked { excess } => estimate(1.0, excess),
+        };
+        // Shortened by what the blocked reaction measured: usually exact after one try. No element
+        // moves further than its sponsor, so shortening the move by some amount lowers what a fixed
+        // element would have to move by at most as much: the estimate is the most the tissue can
+        // allow, and when it leaves no room, there is none.
+        for _ in 0..ESTIMATES {
+            if next >= hi {
+                break; // nothing measured to shorten by: bisect
+            }
+            if (next - lo) * size <= BISECT_TOLERANCE {
+                ws.next_generation();
+                ws.seed_at = goals;
+                return self.finish_seeds(ws, result, starts, free, full_goals);
+            }
+            result.attempts += 1;
+            match attempt(self, ws, next, true) {
+                Outcome::Done => {
+                    done(&mut result, ws, next, self);
+                    ws.seed_at = goals;
+                    return self.finish_seeds(ws, result, starts, free, full_goals);
+                }
+                Outcome::Blocked { excess } => {
+                    hi = next;
+                    next = estimate(next, excess).min(hi);
+                }
+            }
         }
-        let (mut lo, mut hi) = (0.0f32, 1.0f32);
+        // Bisection between the largest share known to work and the smallest known to block.
         for _ in 0..BISECT_STEPS {
+            if (hi - lo) * size <= BISECT_TOLERANCE {
+                break;
+            }
             let mid = 0.5 * (lo + hi);
             result.attempts += 1;
-            if self.chain_reaction(ws, source.index(), at(mid), mask) {
+            if attempt(self, ws, mid, false) == Outcome::Done {
                 lo = mid;
                 ws.rollback(&mut self.pos);
             } else {
@@ -116,28 +278,52 @@ impl Body {
         }
         if lo > 0.0 {
             result.attempts += 1;
-            if self.chain_reaction(ws, source.index(), at(lo), mask) {
-                result.achieved = at(lo);
-                result.fraction = lo;
-                result.moved = ws.moved.len() as u32;
-                return Ok(result);
+            if attempt(self, ws, lo, false) == Outcome::Done {
+                done(&mut result, ws, lo, self);
+                ws.seed_at = goals;
+                return self.finish_seeds(ws, result, starts, free, full_goals);
             }
         }
         ws.next_generation();
-        Ok(result)
+        ws.seed_at = goals;
+        self.finish_seeds(ws, result, starts, free, full_goals)
     }
 
-    /// One chain reaction with the source moved to `goal`. On success the moves stay (recorded in the
-    /// workspace); when a fixed element would have to move, everything is rolled back and `false`
-    /// returned.
-    fn chain_reaction(&mut self, ws: &mut Workspace, source: usize, goal: [f32; 3], mask: [bool; 3]) -> bool {
+    /// Gives the search's scratch back to the workspace.
+    fn finish_seeds(
+        &mut self,
+        ws: &mut Workspace,
+        result: Deformation,
+        starts: Vec<[f32; 3]>,
+        free: Vec<u32>,
+        goals: Vec<[f32; 3]>,
+    ) -> Deformation {
+        ws.seed_starts = starts;
+        ws.seed_free = free;
+        ws.seed_goals = goals;
+        result
+    }
+
+    /// One chain reaction with the seeds moved to their goals. On success the moves stay (recorded in
+    /// the workspace); when a fixed element would have to move, everything is rolled back. With
+    /// `measure`, a blocked reaction runs to its end (the fixed elements stay) to measure how far they
+    /// would have had to go; without, it stops at the first.
+    fn chain_reaction(
+        &mut self,
+        ws: &mut Workspace,
+        seeds: &[u32],
+        goals: &[[f32; 3]],
+        mask: [bool; 3],
+        measure: bool,
+    ) -> Outcome {
         // Compiled for the widest vectors the workspace's level and the machine allow (pulp picks at
         // run time): the runs' portable checks are written as plain loops over lanes and vectorise.
         let arch = ws.simd().arch();
+        let r = Seeds { seeds, goals, measure };
         match mask {
-            [true, true, true] => arch.dispatch(Reaction::<0b111> { body: self, ws, source, goal }),
-            [true, true, false] => arch.dispatch(Reaction::<0b011> { body: self, ws, source, goal }),
-            [false, false, true] => arch.dispatch(Reaction::<0b100> { body: self, ws, source, goal }),
+            [true, true, true] => arch.dispatch(Reaction::<0b111> { body: self, ws, r }),
+            [true, true, false] => arch.dispatch(Reaction::<0b011> { body: self, ws, r }),
+            [false, false, true] => arch.dispatch(Reaction::<0b100> { body: self, ws, r }),
             _ => unreachable!("Pass::mask gives one of three masks"),
         }
     }
@@ -153,22 +339,16 @@ impl Body {
     /// their order and their sponsors are those of per-direction FIFO lists of
     /// `(candidate, link, sponsor)` entries.
     #[inline(always)]
-    fn chain_reaction_in<const MASK: u8>(
-        &mut self,
-        ws: &mut Workspace,
-        source: usize,
-        goal: [f32; 3],
-        wide: Wide,
-    ) -> bool {
+    fn chain_reaction_in<const MASK: u8>(&mut self, ws: &mut Workspace, r: Seeds<'_>, wide: Wide) -> Outcome {
         // Constant widths let the row loop unroll: 4 on sheets, 6 in volumes.
         match self.width {
-            4 => self.chain_reaction_rows::<MASK>(ws, source, goal, [&mut [0; 4], &mut [0; 4]], wide),
-            6 => self.chain_reaction_rows::<MASK>(ws, source, goal, [&mut [0; 6], &mut [0; 6]], wide),
+            4 => self.chain_reaction_rows::<MASK>(ws, r, [&mut [0; 4], &mut [0; 4]], wide),
+            6 => self.chain_reaction_rows::<MASK>(ws, r, [&mut [0; 6], &mut [0; 6]], wide),
             w => {
                 let mut ends = std::mem::take(&mut ws.list_ends);
                 ends.resize(2 * w, 0);
                 let (heads, tails) = ends.split_at_mut(w);
-                let done = self.chain_reaction_rows::<MASK>(ws, source, goal, [heads, tails], wide);
+                let done = self.chain_reaction_rows::<MASK>(ws, r, [heads, tails], wide);
                 ws.list_ends = ends;
                 done
             }
@@ -180,11 +360,10 @@ impl Body {
     fn chain_reaction_rows<const MASK: u8>(
         &mut self,
         ws: &mut Workspace,
-        source: usize,
-        goal: [f32; 3],
+        r: Seeds<'_>,
         [head, tail]: [&mut [usize]; 2],
         wide: Wide,
-    ) -> bool {
+    ) -> Outcome {
         ws.next_generation();
         let width = self.width;
         let n = self.pos.len();
@@ -223,14 +402,24 @@ impl Body {
             tail,
             g: ws.generation,
         };
-        m.record(source, goal, source);
-        for t in 0..width {
-            m.lists[t * n] = source as u32;
-            m.tail[t] = 1;
+        // Every seed moves first, sponsoring itself, and enters every list (in the seeds' order).
+        let mut seeded = 0;
+        for (&s, &g) in r.seeds.iter().zip(r.goals) {
+            let s = s as usize;
+            if s >= n || m.has_moved(s) {
+                continue;
+            }
+            m.record(s, g, s);
+            for t in 0..width {
+                m.lists[t * n + seeded] = s as u32;
+            }
+            seeded += 1;
         }
+        m.tail.fill(seeded);
 
         let mut patterns = Patterns::default();
         let mut blocked = false;
+        let mut excess = [0.0f32; 3];
         'reaction: loop {
             let mut progressed = false;
             for t in 0..width {
@@ -266,9 +455,16 @@ impl Body {
                     }
                     if flags[c] & FIXED != 0 {
                         let (lattice, link_box) = (&self.lattice, &self.link_box[..]);
-                        if fixed_blocks::<MASK>(lattice, link_box, [s, t, c], [m.old[s], ps, pc, q]) {
+                        if let Some(x) =
+                            fixed_blocks::<MASK>(lattice, link_box, [s, t, c], [m.old[s], ps, pc, q])
+                        {
                             blocked = true;
-                            break 'reaction;
+                            if !r.measure {
+                                break 'reaction;
+                            }
+                            for k in 0..3 {
+                                excess[k] = excess[k].max(x[k]);
+                            }
                         }
                         continue;
                     }
@@ -287,33 +483,42 @@ impl Body {
         }
         if blocked {
             ws.rollback(&mut self.pos);
-            return false;
+            return Outcome::Blocked { excess };
         }
-        true
+        Outcome::Done
     }
+}
+
+/// The seeds of one chain reaction: the elements moved first and their goals; whether a blocked
+/// reaction runs to its end to be measured.
+#[derive(Clone, Copy)]
+struct Seeds<'a> {
+    seeds: &'a [u32],
+    goals: &'a [[f32; 3]],
+    measure: bool,
 }
 
 /// One chain reaction, as an operation for [`pulp::Arch::dispatch`].
 struct Reaction<'a, const MASK: u8> {
     body: &'a mut Body,
     ws: &'a mut Workspace,
-    source: usize,
-    goal: [f32; 3],
+    r: Seeds<'a>,
 }
 
 impl<const MASK: u8> pulp::WithSimd for Reaction<'_, MASK> {
-    type Output = bool;
+    type Output = Outcome;
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _: S) -> bool {
+    fn with_simd<S: pulp::Simd>(self, _: S) -> Outcome {
         let wide = Wide::of(self.ws.simd());
-        self.body.chain_reaction_in::<MASK>(self.ws, self.source, self.goal, wide)
+        self.body.chain_reaction_in::<MASK>(self.ws, self.r, wide)
     }
 }
 
 /// Whether moving fixed element `c` to `q` (from `pc`), as demanded by its sponsor `s` (which moved
 /// from `po` to `ps`) through the link of `s`'s adjacency entry `t`, would make that link worse than
-/// it was before this deformation (relaxation can leave links slightly outside their boxes).
+/// it was before this deformation (relaxation can leave links slightly outside their boxes): if so,
+/// by how much more than before `c` would have to move, per coordinate.
 #[cold]
 #[inline(never)]
 fn fixed_blocks<const MASK: u8>(
@@ -321,7 +526,7 @@ fn fixed_blocks<const MASK: u8>(
     link_box: &[[[f32; 3]; 2]],
     [s, t, c]: [usize; 3],
     [po, ps, pc, q]: [[f32; 3]; 4],
-) -> bool {
+) -> Option<[f32; 3]> {
     let link = lattice.adj_link[lattice.adj_start[s] as usize + t];
     debug_assert_eq!(lattice.adj_nbr[lattice.adj_start[s] as usize + t] as usize, c);
     let [lo, hi] = link_box[(link & !SIDE_B) as usize];
@@ -340,5 +545,6 @@ fn fixed_blocks<const MASK: u8>(
     let scale = (hi[0] - lo[0]).abs().max((hi[1] - lo[1]).abs()).max((hi[2] - lo[2]).abs())
         + (lo[0].abs() + lo[1].abs() + lo[2].abs());
     let tol = 1e-5 * scale;
-    norm(sub(q, pc)) > norm(sub(before, pc)) + tol
+    (norm(sub(q, pc)) > norm(sub(before, pc)) + tol)
+        .then(|| [0, 1, 2].map(|k| ((q[k] - pc[k]).abs() - (before[k] - pc[k]).abs()).max(0.0)))
 }

@@ -9,7 +9,7 @@
 //! computed, so every element sees its neighbours' old positions (a Jacobi sweep) while positions
 //! are read once and written once; `bands.rs` cuts a body into bands.
 
-use super::kernel::{FLUSH, OMEGA, max_change, relaxed_with};
+use super::kernel::{FLUSH, OMEGA, max_change, relaxed_bounded};
 use crate::chainmail::body::Body;
 use crate::chainmail::simd::SimdLevel;
 use crate::chainmail::stencil::{Lanes, MAX_LANES, Stencil, shift_lanes};
@@ -215,7 +215,10 @@ impl Body {
             let p = pos_of(i);
             let q = match st.edges.get(at) {
                 Some(e) if !e.fixed => {
-                    relaxed_with(pos_of, p, e.rest, &e.nbr[..w], &e.class[..w], classes, |t, _| e.nbr_rest[t])
+                    relaxed_bounded(pos_of, p, e.rest, &e.nbr[..w], &e.class[..w], classes, |t, _| {
+                        e.nbr_rest[t]
+                    })
+                    .0
                 }
                 _ => p,
             };

@@ -21,6 +21,21 @@ impl Body {
         self.relaxed_in(i, |j| self.pos[j])
     }
 
+    /// [`Body::relaxed_unless_fixed`], then moved into the intersection of element `i`'s link boxes
+    /// around its neighbours' current positions, coordinate by coordinate, where that intersection
+    /// is not empty (one pass over the links for both: the in-place sweep of a disturbed region).
+    #[inline]
+    pub(crate) fn relaxed_into_boxes(&self, i: usize) -> [f32; 3] {
+        let Some((q, lo, hi)) = self.relaxed_bounded_in(i, |j| self.pos[j]) else { return self.pos[i] };
+        let mut out = q;
+        for c in 0..3 {
+            if lo[c] <= hi[c] {
+                out[c] = out[c].clamp(lo[c], hi[c]);
+            }
+        }
+        out
+    }
+
     /// The relaxed position of element `i`, positions read through `pos_of` (a sweep working in place
     /// reads its neighbours' old positions from where it keeps them). Pinned and held elements stay
     /// where they are. A free one takes a damped Jacobi step toward the weighted mean displacement of
@@ -30,13 +45,27 @@ impl Body {
     /// Jacobi step scaled by a factor in `[0, 1]`, and `ω ≤ 1`).
     #[inline(always)]
     pub(crate) fn relaxed_in(&self, i: usize, pos_of: impl Fn(usize) -> [f32; 3]) -> [f32; 3] {
-        let p = pos_of(i);
-        if self.flags[i] & FIXED != 0 {
-            return p;
+        match self.relaxed_bounded_in(i, &pos_of) {
+            Some((q, _, _)) => q,
+            None => pos_of(i),
         }
+    }
+
+    /// [`Body::relaxed_in`] with the intersection of the element's link boxes; `None` for a fixed
+    /// element.
+    #[inline(always)]
+    fn relaxed_bounded_in(
+        &self,
+        i: usize,
+        pos_of: impl Fn(usize) -> [f32; 3],
+    ) -> Option<([f32; 3], [f32; 3], [f32; 3])> {
+        if self.flags[i] & FIXED != 0 {
+            return None;
+        }
+        let p = pos_of(i);
         let (w, rest) = (self.width, &self.lattice.rest);
         let row = i * w..(i + 1) * w;
-        relaxed_with(
+        Some(relaxed_bounded(
             pos_of,
             p,
             rest[i],
@@ -44,7 +73,7 @@ impl Body {
             &self.slot_class[row],
             &self.classes,
             |_, j| rest[j],
-        )
+        ))
     }
 }
 
@@ -74,13 +103,14 @@ pub(super) fn relaxed_row(
     slot_class: &[u32],
 ) -> [f32; 3] {
     let rest = &rest[..pos.len()];
-    relaxed_with(|j| pos[j], p, r, nbrs, slot_class, classes, |_, j| rest[j])
+    relaxed_bounded(|j| pos[j], p, r, nbrs, slot_class, classes, |_, j| rest[j]).0
 }
 
 /// [`relaxed_row`] with the neighbours' positions given by `pos_of(neighbour)` and their rest
-/// positions by `rest_of(slot, neighbour)`.
+/// positions by `rest_of(slot, neighbour)`; also gives the intersection of the element's link boxes
+/// (low and high corners, per coordinate; empty where low exceeds high).
 #[inline(always)]
-pub(crate) fn relaxed_with(
+pub(crate) fn relaxed_bounded(
     pos_of: impl Fn(usize) -> [f32; 3],
     p: [f32; 3],
     r: [f32; 3],
@@ -88,7 +118,7 @@ pub(crate) fn relaxed_with(
     slot_class: &[u32],
     classes: &[SlotClass],
     rest_of: impl Fn(usize, usize) -> [f32; 3],
-) -> [f32; 3] {
+) -> ([f32; 3], [f32; 3], [f32; 3]) {
     let mut acc = [0.0f32; 3];
     let mut wsum = 0.0f32;
     let mut lo = [f32::NEG_INFINITY; 3];
@@ -107,7 +137,7 @@ pub(crate) fn relaxed_with(
         wsum += w;
     }
     if wsum <= 0.0 {
-        return p;
+        return (p, lo, hi);
     }
     let inv = OMEGA / wsum;
     let mut q = p;
@@ -120,5 +150,5 @@ pub(crate) fn relaxed_with(
         // No subnormal coordinates (see `FLUSH`).
         q[c] = (t + FLUSH) - FLUSH;
     }
-    q
+    (q, lo, hi)
 }

@@ -79,23 +79,7 @@ impl Body {
         mut sweep: impl FnMut(&mut Body, &mut Workspace) -> f32,
     ) -> RelaxReport {
         ws.fit(self);
-        let started = budget.max_time.map(|_| Instant::now());
-        let mut report = RelaxReport::default();
-        while report.sweeps < budget.max_sweeps {
-            let change = sweep(self, ws);
-            report.sweeps += 1;
-            report.last_change = change;
-            if change <= budget.tolerance {
-                report.converged = true;
-                break;
-            }
-            if let (Some(t0), Some(limit)) = (started, budget.max_time)
-                && t0.elapsed() >= limit
-            {
-                break;
-            }
-        }
-        report
+        sweeps_within(budget, || sweep(self, ws))
     }
 
     fn sweep_all(&mut self, ws: &mut Workspace) -> f32 {
@@ -173,4 +157,27 @@ impl Body {
         }
         change
     }
+}
+
+/// Runs `sweep` (which returns the largest move of the sweep) until `budget` is spent or the moves
+/// fall to its tolerance: the one budget loop of every relaxation (the whole body's and a disturbed
+/// region's).
+pub(crate) fn sweeps_within(budget: RelaxBudget, mut sweep: impl FnMut() -> f32) -> RelaxReport {
+    let started = budget.max_time.map(|_| Instant::now());
+    let mut report = RelaxReport::default();
+    while report.sweeps < budget.max_sweeps {
+        let change = sweep();
+        report.sweeps += 1;
+        report.last_change = change;
+        if change <= budget.tolerance {
+            report.converged = true;
+            break;
+        }
+        if let (Some(t0), Some(limit)) = (started, budget.max_time)
+            && t0.elapsed() >= limit
+        {
+            break;
+        }
+    }
+    report
 }

@@ -1,0 +1,105 @@
+//! The same exercise at every resolution: the default meninges scene with only its `resolution`
+//! changed, played with the bundled careful script (strokes spaced in metres, instruments sized in
+//! metres), tears nothing, cuts the whole target, scores alike, and lifts the dura to the same
+//! shape; the careless script fails at every resolution.
+
+use std::path::PathBuf;
+
+use dissect::runner;
+use dissect::scene::{Scene, Script, Tissue as SceneTissue};
+use dissect::training::Assessment;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+const RESOLUTIONS: [[u32; 2]; 3] = [[64, 48], [128, 96], [256, 192]];
+
+/// Where the dura's midline (`v` = 0.5) is sampled, as fractions of `u`.
+const SAMPLES: usize = 19;
+
+struct Played {
+    assessment: Assessment,
+    torn: u64,
+    /// Height of the dura above its rest offset along the midline, metres, at `SAMPLES` points.
+    midline: Vec<f32>,
+}
+
+fn play(script: &str, [nu, nv]: [u32; 2]) -> Played {
+    let mut scene = Scene::load(root().join("scenes/meninges.ron")).expect("scene");
+    let SceneTissue::Layers(layers) = &mut scene.tissue else { panic!("the meninges scene is layered") };
+    layers.resolution = [nu, nv];
+    let script = Script::load(root().join("scenes/scripts").join(script)).expect("script");
+    let out = runner::run(&scene, "meninges.ron", &script, "script", None, None).expect("run");
+    let tissue = out.world.tissue();
+    let dura = &tissue.layers()[0];
+    let rest = tissue.body().lattice().rest_positions();
+    let pos = tissue.body().positions();
+    // Each sample averages the dura's rise over the elements within one spacing of it (a tent
+    // weight), so that coarse and fine grids are compared at the same points in metres.
+    let radius = tissue.spacing();
+    let midline = (0..SAMPLES)
+        .map(|k| {
+            let uf = (k + 1) as f32 / (SAMPLES + 1) as f32;
+            let at = tissue.surface_point(uf, 0.5, 0.0);
+            let (mut sum, mut wsum) = (0.0f32, 0.0f32);
+            for i in dura.first..dura.first + dura.count {
+                let (r, p) = (rest[i as usize], pos[i as usize]);
+                let base =
+                    tissue.surface_point(tissue.surface_fractions(r).0, tissue.surface_fractions(r).1, 0.0);
+                let d = ((base[0] - at[0]).powi(2) + (base[1] - at[1]).powi(2) + (base[2] - at[2]).powi(2))
+                    .sqrt();
+                if d < radius {
+                    let w = 1.0 - d / radius;
+                    sum += w * (p[2] - r[2]);
+                    wsum += w;
+                }
+            }
+            assert!(wsum > 0.0, "a dura element near every midline sample");
+            sum / wsum
+        })
+        .collect();
+    Played { assessment: out.metrics.assessment.expect("goals"), torn: out.metrics.links_torn, midline }
+}
+
+#[test]
+fn careful_is_the_same_exercise_at_every_resolution() {
+    let runs: Vec<Played> = RESOLUTIONS.iter().map(|&r| play("meninges_careful.ron", r)).collect();
+    for (run, [nu, nv]) in runs.iter().zip(RESOLUTIONS) {
+        let a = &run.assessment;
+        eprintln!(
+            "{nu}x{nv}: score {:.1}, completion {:.3}, torn {}, midline {:?}",
+            a.score,
+            a.completion,
+            run.torn,
+            run.midline.iter().map(|h| (h * 1e4).round() / 10.0).collect::<Vec<_>>()
+        );
+    }
+    for (run, [nu, nv]) in runs.iter().zip(RESOLUTIONS) {
+        let a = &run.assessment;
+        assert_eq!(run.torn, 0, "{nu}x{nv}: links torn");
+        assert!(a.completion >= 0.95, "{nu}x{nv}: completion {}", a.completion);
+    }
+    let scores: Vec<f32> = runs.iter().map(|r| r.assessment.score).collect();
+    let (lo, hi) = scores.iter().fold((f32::MAX, f32::MIN), |(l, h), &s| (l.min(s), h.max(s)));
+    assert!(hi - lo <= 10.0, "scores {scores:?} differ by more than 10 points");
+    for pair in runs.windows(2) {
+        let lift = pair[1].midline.iter().fold(0.0f32, |m, &h| m.max(h));
+        let worst =
+            pair[0].midline.iter().zip(&pair[1].midline).fold(0.0f32, |m, (a, b)| m.max((a - b).abs()));
+        assert!(
+            worst <= 0.05 * lift,
+            "midline heights differ by {:.2} mm between resolutions, over 5 % of the {:.2} mm lift",
+            worst * 1e3,
+            lift * 1e3
+        );
+    }
+}
+
+#[test]
+fn careless_fails_at_every_resolution() {
+    for r in RESOLUTIONS {
+        let run = play("meninges_careless.ron", r);
+        assert!(run.assessment.score < 30.0, "{r:?}: careless scores {}", run.assessment.score);
+    }
+}
