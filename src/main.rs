@@ -50,6 +50,10 @@ struct WindowArgs {
     /// feature). With no device found the trainer says so and uses the mouse.
     #[arg(long, value_name = "DEVICE", default_value = "mouse")]
     haptic: String,
+    /// Educator mode: the material and simulation panels in the trainee's window (without it a trainee
+    /// cannot change the tissue or the solver mid-assessment).
+    #[arg(long)]
+    educator: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -193,6 +197,7 @@ fn open_app(
         screenshot_dir: window.screenshot_dir,
         source,
         haptic: window.haptic,
+        educator: window.educator,
     };
     match dissect::app::run(options) {
         Ok(()) => Ok(ExitCode::SUCCESS),

@@ -132,6 +132,46 @@ fn hovering_or_one_lift_alone_scores_under_10() {
 }
 
 #[test]
+fn the_coach_says_what_holds_a_lift_and_never_asks_for_cuts_outside_the_target() {
+    for (stem, scene) in exercises() {
+        let top = match &scene.tissue {
+            dissect::scene::Tissue::Layers(l) => l.layers.first().map_or(0.0, |l| l.offset),
+            dissect::scene::Tissue::Volume(_) => 0.0,
+        };
+        let lift = Script(vec![
+            Action::Select(InstrumentKind::Forceps),
+            Action::Grasp(Point::Surface(0.5, 0.5, top)),
+            Action::MoveTo { to: Point::Surface(0.5, 0.5, top + 0.02), steps: 600 },
+            Action::Wait(3500),
+        ]);
+        let out = runner::run(&scene, &stem, &lift, "lift", None, None).unwrap_or_else(|e| panic!("{e}"));
+        let assessor = out.assessor.as_ref().expect("goals");
+        let advice =
+            assessor.advice(&out.world).unwrap_or_else(|| panic!("{stem}: no advice for a held lift"));
+        let expected = if scene.goals.as_ref().is_some_and(|g| !g.incision.is_empty()) {
+            "finish the incision"
+        } else {
+            "uncut fibres under the target"
+        };
+        assert!(advice.text.contains(expected), "{stem}: {advice:?}");
+    }
+    // At the end of the careful session, with the flap folded back, the fibres said to hold it are
+    // only the few target fibres left uncut (the many stretched fibres beyond the target are not the
+    // trainee's to cut, and are never counted).
+    let (_, scene) = exercises().into_iter().find(|(s, _)| s == "durotomy").expect("the default exercise");
+    let script = Script::load(scenes_dir().join("scripts/durotomy_careful.ron")).expect("script");
+    let out = runner::run(&scene, "durotomy", &script, "careful", None, None).expect("run");
+    let assessor = out.assessor.as_ref().expect("goals");
+    let a = assessor.assessment(&out.world);
+    let held = assessor.holding_fibres(&out.world);
+    assert!(
+        held <= a.target_links - a.target_links_cut,
+        "{held} of {} uncut",
+        a.target_links - a.target_links_cut
+    );
+}
+
+#[test]
 fn the_report_is_small_summary_first_and_its_plot_peaks_where_the_panel_does() {
     let (_, scene) = exercises().into_iter().find(|(s, _)| s == "durotomy").expect("the default exercise");
     let mut script = Script::load(scenes_dir().join("scripts/durotomy_careful.ron")).expect("script");

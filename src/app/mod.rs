@@ -81,6 +81,9 @@ pub struct AppOptions {
     pub source: Source,
     /// The haptic device (`mouse`, `inverse3`).
     pub haptic: String,
+    /// Educator mode: the material and simulation panels are shown in the trainee's window and work
+    /// (without it a trainee cannot soften the tissue mid-assessment).
+    pub educator: bool,
 }
 
 /// Opens the windows and runs until the trainee's window is closed (or `frames` have been drawn).
@@ -130,7 +133,8 @@ struct State {
     frames: u64,
     announced: bool,
     replay_done: bool,
-    shots: u32,
+    /// In a replay, the trainee's view follows the trainee's camera as recorded.
+    follow_camera: bool,
 }
 
 struct App {
@@ -175,7 +179,7 @@ impl App {
         let screen = event_loop.primary_monitor().map(|m| m.size()).unwrap_or(PhysicalSize::new(1280, 800));
         let (sw, sh) = (screen.width.max(800), screen.height.max(600));
         let single = self.options.single_window;
-        let trainee_w = if single { sw } else { sw * 16 / 25 };
+        let trainee_w = if single { sw } else { sw * 18 / 25 };
         let height = sh.saturating_sub(20).max(480);
         let create = |title: &str, w: u32, x: u32| -> Result<Arc<Window>, AppError> {
             let attributes = Window::default_attributes()
@@ -240,7 +244,7 @@ impl App {
             frames: 0,
             announced: false,
             replay_done: false,
-            shots: 0,
+            follow_camera: true,
         })
     }
 
@@ -263,6 +267,16 @@ impl App {
         }
         session.advance(dt);
         state.renderer.update(&state.gpu, session.snapshot()).map_err(|e| AppError::Gpu(e.to_string()))?;
+        // The trainee's camera: recorded as it moves in a live session; in a replay, the recorded one
+        // is shown (unless the viewer turned that off).
+        if session.input_enabled() {
+            session.note_view(state.trainee.camera.camera.to_spec());
+        } else if state.follow_camera
+            && let Some(spec) = session.replay_view()
+        {
+            state.trainee.camera.camera = OrbitCamera::from_spec(&spec);
+            state.trainee.camera.moved = true;
+        }
 
         let mut actions = Vec::new();
         let assessment = session.assessment();
@@ -278,6 +292,10 @@ impl App {
             status: &status,
             scene_error: session.scene_error.as_deref(),
             message: session.message(),
+            advice: session.advice(),
+            reload_pending: session.reload_pending,
+            replay: session.replay_state(state.follow_camera),
+            educator: self.options.educator,
         };
         let replaying = !frame.input_enabled;
 
@@ -286,6 +304,15 @@ impl App {
             let win = &mut state.trainee;
             let single = win.second_camera.is_some();
             let second = win.second_texture();
+            // The instrument's tip on screen (points), for the stretch gauge beside it.
+            let ppp = win.egui_ctx.pixels_per_point();
+            let tip = glam::Vec3::from(session.world().instrument().tip);
+            state.trainee_ui.gauge_at = win
+                .camera
+                .camera
+                .project(tip, Vec2::new(win.rect[2], win.rect[3]))
+                .filter(|(_, depth)| (0.0..=1.0).contains(depth))
+                .map(|(px, _)| egui::pos2((win.rect[0] + px.x) / ppp, (win.rect[1] + px.y) / ppp));
             let raw = win.egui_state.take_egui_input(&win.window);
             let mut area = egui::Rect::NOTHING;
             let ui_state = &mut state.trainee_ui;
@@ -402,11 +429,25 @@ fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action:
             out.push(Command::SetAxis(state.hand.axis(&state.trainee.camera.camera)));
         }
         Action::SetInsert(mm) if live => state.hand.tool.insert_mm = mm,
-        Action::SetMaterial(id, m) if live => session.set_material(id, m),
-        Action::SetSweeps(n) if live => session.set_sweeps(n),
-        Action::Reload if live && session.reload() => {
+        // Tuning is for educators: a trainee cannot soften the tissue mid-assessment.
+        Action::SetMaterial(id, m) if live && options.educator => session.set_material(id, m),
+        Action::SetSweeps(n) if live && options.educator => session.set_sweeps(n),
+        Action::Reload if live && session.request_reload() => {
             state.hand.release(true, &mut Vec::new());
             state.hand.tool.kind = session.start_tool().0;
+        }
+        Action::ConfirmReload if live && session.reload() => {
+            state.hand.release(true, &mut Vec::new());
+            state.hand.tool.kind = session.start_tool().0;
+        }
+        Action::KeepSession => session.keep_session(),
+        Action::ReplayPause(p) => session.set_paused(p),
+        Action::ReplaySeek(step) => session.seek(step),
+        Action::ReplayFollowCamera(on) => {
+            state.follow_camera = on;
+            if !on {
+                state.trainee.camera.reset();
+            }
         }
         Action::Report => match session.write_report() {
             Some(summary) => {
@@ -446,10 +487,9 @@ fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action:
     queue_all(session, out);
 }
 
-/// Saves every view as `trainee-N.png` / `observer-N.png`, rendered offscreen from each view's camera
-/// at its size.
+/// Saves every view as `<date>_<time>-trainee.png` / `...-observer.png` (never overwriting an earlier
+/// one), rendered offscreen from each view's camera at its size.
 fn screenshot(state: &mut State, session: &mut Session, options: &AppOptions) {
-    state.shots += 1;
     let dir = options.screenshot_dir.clone().unwrap_or_else(|| PathBuf::from("screenshots"));
     if let Err(e) = std::fs::create_dir_all(&dir) {
         session.say(format!("cannot create {}: {e}", dir.display()));
@@ -460,8 +500,16 @@ fn screenshot(state: &mut State, session: &mut Session, options: &AppOptions) {
         views.extend(w.shots());
     }
     let mut saved = Vec::new();
-    for ((camera, w, h), name) in views.into_iter().zip(["trainee", "observer"]) {
-        let path = dir.join(format!("{name}-{}.png", state.shots));
+    let stem = session::date_time_stem();
+    let free = |n: u32| {
+        let tag = if n <= 1 { stem.clone() } else { format!("{stem}-{n}") };
+        ["trainee", "observer"].map(|name| dir.join(format!("{tag}-{name}.png")))
+    };
+    let mut n = 1;
+    while free(n).iter().any(|p| p.exists()) {
+        n += 1;
+    }
+    for ((camera, w, h), path) in views.into_iter().zip(free(n)) {
         let result = render_to_image(&state.gpu, session.snapshot(), &camera, w.max(16), h.max(16))
             .and_then(|image| save_png(&image, &path));
         match result {
@@ -618,6 +666,12 @@ impl ApplicationHandler for App {
             }
             WindowEvent::KeyboardInput { event, .. } => {
                 if consumed || event.state != ElementState::Pressed {
+                    return;
+                }
+                if event.logical_key == Key::Named(NamedKey::Space)
+                    && let Some(r) = session.replay_state(state.follow_camera)
+                {
+                    session.set_paused(!r.paused);
                     return;
                 }
                 if event.logical_key == Key::Named(NamedKey::Escape) {

@@ -10,12 +10,14 @@ use crate::chainmail::{Material, MaterialId};
 use crate::instrument::{Command as InstrumentCommand, Picker};
 use crate::runner::{Episode, Event, Given, Input, Player, Published, SimThread, Source};
 use crate::scene::{Action as ScriptAction, DEFAULT_SCENE, DEFAULT_SCENE_PATH, Recorder, Recording, Scene};
-use crate::simulation::{Command, InstrumentKind, Snapshot, WorldView};
+use crate::simulation::{CameraSpec, Command, InstrumentKind, Snapshot, WorldView};
 use crate::tissue::CutDepth;
-use crate::training::{Assessment, Assessor, Report};
-use crate::ui::{FrameSample, ReportSummary, ThreadPace, Timing};
+use crate::training::{Advice, Assessment, Assessor, Report};
+use crate::ui::{FrameSample, ReplayState, ReportSummary, ThreadPace, Timing};
 /// How often the scene file's modification time is checked.
 const WATCH_EVERY: Duration = Duration::from_millis(500);
+/// The trainee's camera is recorded at most this often while it moves.
+const VIEW_EVERY: Duration = Duration::from_millis(100);
 
 /// Who drives the session's episode.
 pub enum Driver {
@@ -32,7 +34,30 @@ pub enum Driver {
         commands: usize,
         /// What is played (for the status line).
         label: String,
+        /// The actions played (kept to play again from the start when seeking back).
+        actions: Vec<ScriptAction>,
+        /// The last step the recording reaches.
+        last_step: u64,
+        /// The trainee's camera as recorded: from each step on, where it looked.
+        views: Vec<(u64, CameraSpec)>,
     },
+}
+
+impl Driver {
+    /// A replay of `actions`.
+    fn replay(actions: Vec<ScriptAction>, label: String) -> Self {
+        let commands = actions.iter().filter(|a| matches!(a, ScriptAction::Command(_))).count();
+        let script = crate::scene::Script(actions);
+        let views = script
+            .timeline()
+            .into_iter()
+            .filter_map(|t| match &script.0[t.index] {
+                ScriptAction::View(c) => Some((t.start, *c)),
+                _ => None,
+            })
+            .collect();
+        Driver::Replay { commands, label, last_step: script.duration_steps(), actions: script.0, views }
+    }
 }
 
 /// Polls a scene file's modification time.
@@ -96,6 +121,10 @@ pub struct Session {
     message: Option<(String, Instant)>,
     started: Instant,
     last_step: u64,
+    /// The scene file changed (or F5) while the session ran: waiting for the trainee's answer.
+    pub reload_pending: bool,
+    /// The trainee's camera as last recorded, and when.
+    last_view: Option<(CameraSpec, Instant)>,
 }
 
 /// Now, UTC, as `2026-11-22_05-30-12` (names of recordings and screenshots).
@@ -216,6 +245,8 @@ impl Session {
             message: warning,
             started: Instant::now(),
             last_step: 0,
+            reload_pending: false,
+            last_view: None,
         })
     }
 
@@ -229,9 +260,8 @@ impl Session {
             .script()
             .check_against(&scene)
             .map_err(|e| AppError::Scene(format!("{}: {e}", path.display())))?;
-        let commands = recording.actions.iter().filter(|a| matches!(a, ScriptAction::Command(_))).count();
-        let driver = Driver::Replay { commands, label: path.display().to_string() };
-        let source = Source::Script(Player::new(recording.actions));
+        let source = Source::Script(Player::new(recording.actions.clone()));
+        let driver = Driver::replay(recording.actions, path.display().to_string());
         Self::with(scene, recording.scene_source, recording.scene, driver, source)
     }
 
@@ -242,9 +272,9 @@ impl Session {
         script
             .check_against(&scene)
             .map_err(|e| AppError::Scene(format!("{}: {e}", script_path.display())))?;
-        let commands = script.0.iter().filter(|a| matches!(a, ScriptAction::Command(_))).count();
-        let driver = Driver::Replay { commands, label: script_path.display().to_string() };
-        let mut session = Self::with(scene, source, label, driver, Source::Script(Player::new(script.0)))?;
+        let player = Player::new(script.0.clone());
+        let driver = Driver::replay(script.0, script_path.display().to_string());
+        let mut session = Self::with(scene, source, label, driver, Source::Script(player))?;
         session.watch = scene_path.map(Watch::new);
         Ok(session)
     }
@@ -408,7 +438,7 @@ impl Session {
                 format!("REC {} ({} commands)", path.display(), p.recorded)
             }
             (Driver::Live { .. }, None) => "not recording".to_string(),
-            (Driver::Replay { label, commands }, _) => {
+            (Driver::Replay { label, commands, .. }, _) => {
                 format!("REPLAY {label} ({commands} commands){}", if p.finished { " — finished" } else { "" })
             }
         }
@@ -444,10 +474,106 @@ impl Session {
         self.queue(Command::SetRelaxSweeps(sweeps));
     }
 
-    /// Checks the scene file; reloads it if it changed. Returns true when a new scene runs.
+    /// Checks the scene file; reloads it if it changed (or asks first, see
+    /// [`Session::request_reload`]). Returns true when a new scene runs.
     pub fn poll_reload(&mut self) -> bool {
         let changed = self.watch.as_mut().is_some_and(Watch::changed);
-        changed && self.reload()
+        changed && self.request_reload()
+    }
+
+    /// Whether a reload would throw work away: the exercise's clock has started, or commands were
+    /// recorded.
+    pub fn running(&self) -> bool {
+        let p = self.published();
+        p.assessment.as_ref().is_some_and(|a| a.started) || p.recorded > 0
+    }
+
+    /// Reloads at once when nothing would be lost; otherwise asks first (`reload_pending`, answered by
+    /// [`Session::reload`] or [`Session::keep_session`]). Returns true when a new scene runs.
+    pub fn request_reload(&mut self) -> bool {
+        if !self.input_enabled() {
+            return false;
+        }
+        if self.running() {
+            self.reload_pending = true;
+            return false;
+        }
+        self.reload()
+    }
+
+    /// The answer "keep the session" to the reload question.
+    pub fn keep_session(&mut self) {
+        self.reload_pending = false;
+        self.say("kept the session; F5 reloads the scene when you are ready");
+    }
+
+    /// What stops the trainee now, as of the last frame taken from the thread.
+    pub fn advice(&self) -> Option<&Advice> {
+        self.published().advice.as_ref()
+    }
+
+    /// Records the trainee's camera when it changed (at most every [`VIEW_EVERY`] while it moves), so
+    /// that a replay can show the session through it.
+    pub fn note_view(&mut self, camera: CameraSpec) {
+        if !self.input_enabled() {
+            return;
+        }
+        let due = match &self.last_view {
+            None => true,
+            Some((last, at)) => *last != camera && at.elapsed() >= VIEW_EVERY,
+        };
+        if due {
+            self.pending.push(Given::View(camera));
+            self.last_view = Some((camera, Instant::now()));
+        }
+    }
+
+    /// Where a replay stands, for its controls (`None` when live).
+    pub fn replay_state(&self, follow_camera: bool) -> Option<ReplayState> {
+        let Driver::Replay { last_step, views, .. } = &self.driver else { return None };
+        Some(ReplayState {
+            step: self.world().step_count(),
+            last_step: *last_step,
+            rate_hz: self.world().config().rate_hz as f32,
+            paused: self.published().paused,
+            has_camera: !views.is_empty(),
+            follow_camera,
+        })
+    }
+
+    /// The trainee's camera as recorded at the step shown, when the replay has it.
+    pub fn replay_view(&self) -> Option<CameraSpec> {
+        let Driver::Replay { views, .. } = &self.driver else { return None };
+        let step = self.world().step_count();
+        let k = views.partition_point(|(s, _)| *s <= step);
+        views.get(k.checked_sub(1)?).map(|(_, c)| *c)
+    }
+
+    /// Replay: pause or play on.
+    pub fn set_paused(&mut self, pause: bool) {
+        if matches!(self.driver, Driver::Replay { .. }) {
+            self.sim.send(Input::Pause(pause));
+        }
+    }
+
+    /// Replay: goes to step `target`: the recording is played again from the start up to it, here, as
+    /// fast as the machine goes (the simulation is deterministic, so the same steps give the same
+    /// tissue), and the thread takes it on from there.
+    pub fn seek(&mut self, target: u64) {
+        let Driver::Replay { actions, last_step, .. } = &self.driver else { return };
+        let target = target.min(*last_step);
+        let player = Player::new(actions.clone());
+        let mut episode = match build(&self.scene, &self.scene_label, Source::Script(player)) {
+            Ok(e) => e,
+            Err(e) => return self.say(e.to_string()),
+        };
+        while episode.world().step_count() < target {
+            if episode.step().is_none() {
+                break;
+            }
+        }
+        self.sim.send(Input::Replace(Box::new(episode)));
+        self.picker_step = None;
     }
 
     /// Loads the scene again (from its file, or the built-in text): on success the world restarts on
@@ -494,6 +620,8 @@ impl Session {
         self.picker_step = None;
         self.last_step = 0;
         self.scene_error = None;
+        self.reload_pending = false;
+        self.last_view = None;
         self.say(format!("reloaded {}", self.scene_label));
         true
     }
@@ -657,6 +785,79 @@ mod tests {
             serde_json::to_string(&State::of(e.world().tissue(), e.world().step_count())).expect("json")
         };
         assert_eq!(state(&replayed), state(&ended));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Takes frames until `done` holds (or fails after 30 s).
+    fn until(session: &mut Session, what: &str, done: impl Fn(&Session) -> bool) {
+        let t = Instant::now();
+        while !done(session) {
+            assert!(t.elapsed() < Duration::from_secs(30), "{what}");
+            session.advance(Duration::from_millis(5));
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    #[test]
+    fn a_reload_asks_first_once_the_session_has_started() {
+        let dir = std::env::temp_dir().join(format!("dissect-reload-{}", std::process::id()));
+        let mut live = Session::live(None, dir.join("r.ron")).expect("live session");
+        // Nothing done yet: a reload goes ahead at once.
+        assert!(live.request_reload());
+        assert!(!live.reload_pending);
+        live.queue(InstrumentCommand::Select(InstrumentKind::Scalpel));
+        live.advance(Duration::from_millis(5));
+        until(&mut live, "the command is not recorded", |s| s.published().recorded > 0);
+        // Work would be lost: the trainee is asked, and the session runs on.
+        assert!(!live.request_reload());
+        assert!(live.reload_pending);
+        live.keep_session();
+        assert!(!live.reload_pending);
+        assert!(live.published().recorded > 0, "the session ran on");
+        // The answer "reload" restarts it.
+        assert!(!live.request_reload());
+        assert!(live.reload());
+        assert!(!live.reload_pending);
+        until(&mut live, "the new episode does not start", |s| s.published().recorded == 0);
+        live.finish();
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_replay_shows_the_trainees_camera_pauses_and_seeks() {
+        let dir = std::env::temp_dir().join(format!("dissect-seek-{}", std::process::id()));
+        let rec = dir.join("r.ron");
+        let mut live = Session::live(None, rec.clone()).expect("live session");
+        let view = CameraSpec { eye: [0.0, 0.05, 0.05], target: [0.0; 3], fov_y_deg: 40.0 };
+        live.note_view(view);
+        live.queue(InstrumentCommand::Select(InstrumentKind::Forceps));
+        live.queue(InstrumentCommand::MoveTo([0.0, 0.01, 0.0]));
+        live.advance(Duration::from_millis(5));
+        std::thread::sleep(Duration::from_millis(30));
+        live.queue(InstrumentCommand::MoveTo([0.003, 0.008, 0.001]));
+        live.advance(Duration::from_millis(5));
+        std::thread::sleep(Duration::from_millis(30));
+        live.advance(Duration::from_millis(5));
+        let ended = live.finish().expect("the live episode");
+        let end = ended.world().step_count();
+
+        let mut replay = Session::replay(&rec).expect("replay");
+        let state = replay.replay_state(true).expect("a replay");
+        assert_eq!(state.last_step, end);
+        assert!(state.has_camera);
+        assert_eq!(replay.replay_view(), Some(view));
+        replay.seek(end);
+        until(&mut replay, "the seek does not arrive", |s| s.world().step_count() >= end);
+        assert_eq!(replay.world().instrument().target, [0.003, 0.008, 0.001]);
+        replay.seek(0);
+        until(&mut replay, "the seek back does not arrive", |s| s.world().step_count() < end);
+        replay.set_paused(true);
+        until(&mut replay, "the pause does not arrive", |s| s.published().paused);
+        let at = replay.world().step_count();
+        std::thread::sleep(Duration::from_millis(50));
+        replay.advance(Duration::from_millis(5));
+        assert_eq!(replay.world().step_count(), at, "paused");
+        replay.finish();
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

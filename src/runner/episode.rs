@@ -112,6 +112,17 @@ impl Episode {
         self.record_error.take()
     }
 
+    /// Records where the trainee's camera looks from the next step on, when recording (a view changes
+    /// nothing in the world; a replay shows the session through it).
+    pub fn record_view(&mut self, camera: &crate::snapshot::CameraSpec) {
+        if let Some(r) = &mut self.recorder
+            && let Err(e) = r.record_view(self.world.step_count(), camera)
+        {
+            self.record_error = Some((r.path().display().to_string(), e.to_string()));
+            self.recorder = None;
+        }
+    }
+
     /// Keeps stepping without input once a script has ended (instead of finishing).
     pub fn run_past_end(&mut self, on: bool) {
         self.run_past_end = on;

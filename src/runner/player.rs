@@ -173,6 +173,8 @@ impl Player {
                 }
                 world.push(c)
             }
+            // The trainee's camera: for whoever shows the replay, nothing for the world.
+            Action::View(_) => {}
         }
     }
 }

@@ -45,6 +45,8 @@ pub enum Given {
     ///
     /// [`World::element_at`]: crate::simulation::World::element_at
     GraspAt(Hit),
+    /// Where the trainee's camera looks from the next step on (recorded, changes nothing in the world).
+    View(crate::snapshot::CameraSpec),
 }
 
 /// What the thread is told.
@@ -119,6 +121,8 @@ pub struct Published {
     pub view: WorldView,
     /// The live assessment, when the scene has goals.
     pub assessment: Option<Assessment>,
+    /// What stops the trainee now, if anything (the coach's sentence).
+    pub advice: Option<crate::training::Advice>,
     /// The thread's pace.
     pub pace: Pace,
     /// Commands recorded since recording began.
@@ -137,6 +141,7 @@ impl Published {
         episode.snapshot_into(&mut self.snapshot);
         episode.world().view_into(&mut self.view);
         self.assessment = episode.assessor().map(|a| a.assessment(episode.world()));
+        self.advice = episode.assessor().and_then(|a| a.advice(episode.world()));
         self.recorded = episode.recorded();
         self.recording = episode.recorder().map(|r| r.path().to_path_buf());
         self.finished = episode.finished();
@@ -324,6 +329,7 @@ fn take(episode: &mut Episode, input: Input, say: &Sender<Event>, paused: &mut b
                             episode.push(InstrumentCommand::GraspElement(e));
                         }
                     }
+                    Given::View(camera) => episode.record_view(&camera),
                 }
             }
         }

@@ -188,6 +188,19 @@ impl Recorder {
         Ok(())
     }
 
+    /// Records where the trainee's camera looks from step `step` on (a `View` action: nothing for the
+    /// world, the replay's camera).
+    pub fn record_view(&mut self, step: u64, camera: &crate::snapshot::CameraSpec) -> std::io::Result<()> {
+        let v = ron::to_string(&Action::View(*camera)).map_err(std::io::Error::other)?;
+        if self.last_step != Some(step) {
+            writeln!(self.out, "        At({step}), {v},")?;
+            self.last_step = Some(step);
+        } else {
+            writeln!(self.out, "        {v},")?;
+        }
+        Ok(())
+    }
+
     /// Pushes what is buffered to the disk.
     pub fn flush(&mut self) -> std::io::Result<()> {
         self.last_flush = Instant::now();

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::snapshot::InstrumentKind;
+use crate::snapshot::{CameraSpec, InstrumentKind};
 
 use super::error::{FieldPath, Problem, SceneError, parse_error, problem};
 use super::validate::{finite, within};
@@ -80,6 +80,9 @@ pub enum Action {
     GraspElement(u32),
     /// A raw world command, applied at once (what a recording writes for live input). No time.
     Command(crate::simulation::Command),
+    /// Where the trainee's camera looked from here on (what a recording writes as the trainee moves it,
+    /// so that a replay can show the session through it). Changes nothing in the world. No time.
+    View(CameraSpec),
 }
 
 impl Action {
@@ -95,7 +98,8 @@ impl Action {
             | Action::Release
             | Action::At(_)
             | Action::GraspElement(_)
-            | Action::Command(_) => 0,
+            | Action::Command(_)
+            | Action::View(_) => 0,
         }
     }
 }
@@ -359,6 +363,7 @@ impl Script {
                     steps_at_least_1(&at.f("steps"), *steps)?;
                 }
                 Action::Wait(n) => steps_at_least_1(&at.inner(), *n)?,
+                Action::View(c) => super::validate::camera(&at.inner(), c)?,
                 Action::At(n) => {
                     if let Some(prev) = last_at
                         && *n < prev
@@ -390,6 +395,7 @@ fn name(a: &Action) -> &'static str {
         Action::At(_) => "At",
         Action::GraspElement(_) => "GraspElement",
         Action::Command(_) => "Command",
+        Action::View(_) => "View",
     }
 }
 
@@ -499,5 +505,21 @@ mod tests {
     fn at_going_back_is_refused_at_its_value() {
         let e = Script::from_str("Script([At(5),\n At(3)])", "s.ron").expect_err("At going back");
         assert_eq!(e.line_column(), Some((2, 5)), "{e}");
+    }
+
+    #[test]
+    fn a_view_takes_no_time_and_its_camera_is_checked() {
+        let s = Script::from_str(
+            "Script([View((eye: (0.0, 0.06, 0.05), target: (0.0, 0.0, 0.0), fov_y_deg: 45.0)), Wait(10)])",
+            "s.ron",
+        )
+        .expect("a view");
+        assert_eq!(s.duration_steps(), 10);
+        let e = Script::from_str(
+            "Script([\n View((eye: (0.0, 0.06, 0.05), target: (0.0, 0.0, 0.0), fov_y_deg: 0.0))])",
+            "s.ron",
+        )
+        .expect_err("no field of view");
+        assert!(e.to_string().contains("field of view"), "{e}");
     }
 }

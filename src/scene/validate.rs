@@ -625,7 +625,8 @@ fn fem(at: &FieldPath, f: &FemParams) -> Result<(), Problem> {
     Ok(())
 }
 
-fn camera(at: &FieldPath, c: &CameraSpec) -> Result<(), Problem> {
+/// A camera: eye and target finite and within reach, apart, a field of view in (1, 179) degrees.
+pub(crate) fn camera(at: &FieldPath, c: &CameraSpec) -> Result<(), Problem> {
     for (name, p) in [("eye", c.eye), ("target", c.target)] {
         let a = at.f(if name == "eye" { "eye" } else { "target" });
         for (i, x) in p.into_iter().enumerate() {

@@ -34,13 +34,16 @@ const HOLDING_M: f32 = 0.0005;
 const WARN_SHARE: f32 = 0.9;
 
 impl Assessor {
-    /// Intact connective fibres stretched by a lift (their upper end pulled away from the lower).
+    /// Intact connective fibres under the target stretched by a lift (their upper end pulled away from
+    /// the lower): the ones the trainee is to cut. Fibres outside the target are not counted: cutting
+    /// them is damage, so the coach never asks for it.
     pub fn holding_fibres(&self, world: &World) -> u32 {
         let body = world.tissue().body();
         let p = body.positions();
-        self.connective
+        self.target
             .iter()
-            .filter(|&&(l, a, b)| {
+            .zip(&self.target_pairs)
+            .filter(|&(&l, &(a, b))| {
                 body.link_intact(l) && p[b as usize][2] - p[a as usize][2] - self.rest_gap > HOLDING_M
             })
             .count() as u32
@@ -82,14 +85,14 @@ impl Assessor {
             let lag = ((t[0] - p[0]).powi(2) + (t[1] - p[1]).powi(2) + (t[2] - p[2]).powi(2)).sqrt();
             if lag > STALL_M {
                 let held = self.holding_fibres(world);
-                let text = if held > 0 {
-                    format!(
-                        "held by {held} uncut fibres: cut them between the layers (2 for the scalpel, B for the depth)"
-                    )
-                } else if self.incision_share(tissue).is_some_and(|s| s < 0.95) {
+                let text = if self.incision_share(tissue).is_some_and(|s| s < 0.95) {
                     format!("held by the uncut {upper}: finish the incision first (2, then U)")
+                } else if held > 0 {
+                    format!(
+                        "held by {held} uncut fibres under the target: cut them between the layers (2 for the scalpel, B for the depth)"
+                    )
                 } else {
-                    format!("the {upper} is held at its edges: it will not come further this way")
+                    format!("the {upper} is held beyond the target: it will not come further this way")
                 };
                 return Some(Advice { text, level: AdviceLevel::Info });
             }

@@ -159,8 +159,6 @@ pub struct Assessor {
     target_pairs: Vec<(u32, u32)>,
     /// Connective links outside the target.
     outside: Vec<LinkId>,
-    /// Every connective link with its (lower, upper) elements, for the coach.
-    connective: Vec<(LinkId, u32, u32)>,
     /// Links (any kind) in a forbidden region.
     forbidden: Vec<LinkId>,
     /// In-layer links whose cutting is damage (all but the upper layer's along the planned incision).
@@ -212,7 +210,7 @@ impl Assessor {
         // Layers count from the upper one.
         let upper = LinkKind::Layer(0);
         let (mut target, mut outside, mut forbidden, mut target_pairs) = (vec![], vec![], vec![], vec![]);
-        let (mut penalised, mut connective) = (vec![], vec![]);
+        let mut penalised = vec![];
         let mut rest_gap = 0.0;
         for l in 0..tissue.body().link_count() {
             let id = LinkId(l as u32);
@@ -225,7 +223,6 @@ impl Assessor {
             }
             match tissue.link_kind(id) {
                 Some(LinkKind::Connective) => {
-                    connective.push((id, a.0, b.0));
                     if goals.target.contains(u, v) {
                         target.push(id);
                         target_pairs.push((a.0, b.0));
@@ -265,7 +262,6 @@ impl Assessor {
             target,
             target_pairs,
             outside,
-            connective,
             forbidden,
             penalised,
             incision,
@@ -475,7 +471,7 @@ impl Assessor {
             lost.push((
                 30.0 * (1.0 - i),
                 format!(
-                    "Finish the incision: {:.0} % of the marked line through the {upper} is cut.",
+                    "Finish the incision: {:.0} % of the planned line through the {upper} is cut (see the exercise's steps).",
                     100.0 * i
                 ),
             ));
@@ -509,7 +505,7 @@ impl Assessor {
         lost.push((
             2.0 * layer_cut as f32,
             if incision.is_some() {
-                format!("Cut only along the marked incision, at depth U: {layer_cuts} cut elsewhere.")
+                format!("Cut only along the planned incision, at depth U: {layer_cuts} cut elsewhere.")
             } else {
                 format!("Do not cut through the layers (depth B cuts only the fibres): {layer_cuts} cut.")
             },

@@ -6,6 +6,7 @@
 //! import egui and the simulation side's public types; never winit or wgpu.
 
 mod assessment;
+mod exercise;
 mod force;
 mod help;
 mod instruments;
@@ -16,6 +17,7 @@ mod simulation;
 mod timing;
 
 pub use assessment::AssessmentPanel;
+pub use exercise::{ExercisePanel, tool_hint, view_overlay};
 pub use force::ForcePanel;
 pub use help::{BINDINGS, HelpOverlay};
 pub use instruments::{InstrumentBar, ToolState};
@@ -29,7 +31,7 @@ use crate::chainmail::{Material, MaterialId};
 use crate::scene::Scene;
 use crate::simulation::{InstrumentKind, WorldView};
 use crate::tissue::CutDepth;
-use crate::training::Assessment;
+use crate::training::{Advice, Assessment};
 
 /// What a control asks the app to do.
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +62,33 @@ pub enum Action {
     ResetCameras,
     /// Show or hide the exercise's regions drawn on the tissue.
     ToggleRegions,
+    /// The scene file changed: reload it and restart the session (the answer to the question).
+    ConfirmReload,
+    /// The scene file changed: keep the running session (the answer to the question).
+    KeepSession,
+    /// Replay: pause (true) or play on.
+    ReplayPause(bool),
+    /// Replay: go to this step (a step behind plays the recording again from the start, quickly).
+    ReplaySeek(u64),
+    /// Replay: show the trainee's view through the trainee's camera as recorded (true) or a free one.
+    ReplayFollowCamera(bool),
+}
+
+/// Where a replay stands, for its control bar.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReplayState {
+    /// The step shown.
+    pub step: u64,
+    /// The recording's last step.
+    pub last_step: u64,
+    /// The simulation's rate, steps per second (to show times).
+    pub rate_hz: f32,
+    /// Paused.
+    pub paused: bool,
+    /// The recording has the trainee's camera.
+    pub has_camera: bool,
+    /// The trainee's view follows the recorded camera.
+    pub follow_camera: bool,
 }
 
 /// Everything a panel may read in one frame.
@@ -85,6 +114,14 @@ pub struct Frame<'a> {
     pub scene_error: Option<&'a str>,
     /// A transient message (screenshot saved, material refused).
     pub message: Option<&'a str>,
+    /// What stops the trainee now, if anything (held by fibres, stretch near the limit, a tear).
+    pub advice: Option<&'a Advice>,
+    /// The scene file changed while a session runs: the trainee is asked before it restarts.
+    pub reload_pending: bool,
+    /// The replay's position and controls, when replaying.
+    pub replay: Option<ReplayState>,
+    /// Educator mode: the material and simulation panels are shown and work.
+    pub educator: bool,
 }
 
 /// A panel: draws itself into `ui` from `frame` and reports what the user asked for in `actions`.
@@ -114,15 +151,19 @@ pub fn status_bar(ui: &mut egui::Ui, frame: &Frame<'_>, role: &str) {
     }
 }
 
-/// The trainee window's panels: instrument bar on the left, tuning and figures on the right, status on
-/// top, help and report on demand.
+/// The trainee window's panels: instrument bar on the left, the exercise and the figures on the right
+/// (the material and simulation panels too in educator mode), status on top (and the replay's controls
+/// at the bottom), the coach, the tool's hint and the stretch gauge over the view, help, report and the
+/// reload question on demand.
 #[derive(Default)]
 pub struct TraineeUi {
     /// Instrument bar.
     pub instruments: InstrumentBar,
-    /// Material sliders.
+    /// Instructions, checklist, clock.
+    pub exercise: ExercisePanel,
+    /// Material sliders (educator mode).
     pub materials: MaterialPanel,
-    /// Relaxation, reload, timing plot.
+    /// Relaxation, reload, timing plot (educator mode).
     pub simulation: SimulationPanel,
     /// Live figures.
     pub assessment: AssessmentPanel,
@@ -134,7 +175,13 @@ pub struct TraineeUi {
     pub help: HelpOverlay,
     /// The last report.
     pub report: ReportWindow,
+    /// Where the instrument's tip is on screen (points), for the stretch gauge.
+    pub gauge_at: Option<egui::Pos2>,
 }
+
+/// Width of the trainee window's side panel, points: fixed, so that its contents are laid out to it and
+/// never spill past its edge.
+const SIDE_WIDTH: f32 = 270.0;
 
 impl TraineeUi {
     /// Draws the panels; returns the area left for the 3D view (points). With `with_monitor`, the
@@ -147,35 +194,97 @@ impl TraineeUi {
         actions: &mut Vec<Action>,
     ) -> egui::Rect {
         egui::Panel::top("trainee-status").show(ui, |ui| status_bar(ui, frame, "trainee"));
+        if let Some(r) = frame.replay {
+            egui::Panel::bottom("replay-bar").show(ui, |ui| replay_bar(ui, r, actions));
+        }
         egui::Panel::left("instrument-bar").resizable(false).exact_size(170.0).show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| self.instruments.ui(ui, frame, actions));
         });
-        egui::Panel::right("trainee-side").resizable(true).default_size(250.0).max_size(290.0).show(
-            ui,
-            |ui| {
-                ui.spacing_mut().slider_width = 90.0;
-                egui::ScrollArea::vertical().show(ui, |ui| {
-                    egui::CollapsingHeader::new("Assessment")
-                        .default_open(true)
-                        .show(ui, |ui| self.assessment.ui(ui, frame, actions));
-                    egui::CollapsingHeader::new("Force")
-                        .default_open(true)
-                        .show(ui, |ui| self.force.ui(ui, frame, actions));
+        egui::Panel::right("trainee-side").resizable(false).exact_size(SIDE_WIDTH).show(ui, |ui| {
+            ui.spacing_mut().slider_width = 80.0;
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                egui::CollapsingHeader::new("Exercise")
+                    .default_open(true)
+                    .show(ui, |ui| self.exercise.ui(ui, frame, actions));
+                egui::CollapsingHeader::new("Assessment")
+                    .default_open(true)
+                    .show(ui, |ui| self.assessment.ui(ui, frame, actions));
+                egui::CollapsingHeader::new("Force")
+                    .default_open(!with_monitor)
+                    .show(ui, |ui| self.force.ui(ui, frame, actions));
+                if frame.educator {
                     egui::CollapsingHeader::new("Simulation")
                         .default_open(true)
                         .show(ui, |ui| self.simulation.ui(ui, frame, actions));
                     ui.collapsing("Materials", |ui| self.materials.ui(ui, frame, actions));
-                    if with_monitor {
-                        ui.collapsing("Monitor", |ui| self.monitor.ui(ui, frame, actions));
-                    }
-                });
-            },
-        );
+                }
+                if with_monitor {
+                    ui.collapsing("Monitor", |ui| self.monitor.ui(ui, frame, actions));
+                }
+            });
+        });
         let rect = ui.available_rect_before_wrap();
+        let view = if with_monitor {
+            egui::Rect::from_min_max(rect.min, egui::pos2(rect.center().x, rect.max.y))
+        } else {
+            rect
+        };
+        view_overlay(ui, view, frame, self.gauge_at);
         self.help.ui(ui, frame, actions);
         self.report.ui(ui, frame, actions);
+        if frame.reload_pending {
+            reload_question(ui, actions);
+        }
         rect
     }
+}
+
+/// Asks whether to restart the running session on the scene as it is now (its file changed, or F5).
+fn reload_question(ui: &egui::Ui, actions: &mut Vec<Action>) {
+    egui::Window::new("Reload the scene?")
+        .collapsible(false)
+        .resizable(false)
+        .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
+        .show(ui.ctx(), |ui| {
+            ui.label(
+                "The scene changed on disk, or F5 was pressed. Reloading restarts the session: the tissue, \
+                 the clock and the score start again, and a new recording begins.",
+            );
+            ui.horizontal(|ui| {
+                if ui.button("Reload and restart").clicked() {
+                    actions.push(Action::ConfirmReload);
+                }
+                if ui.button("Keep the session").clicked() {
+                    actions.push(Action::KeepSession);
+                }
+            });
+        });
+}
+
+/// Pause, seek and camera for a replay.
+fn replay_bar(ui: &mut egui::Ui, r: ReplayState, actions: &mut Vec<Action>) {
+    ui.horizontal(|ui| {
+        if ui.button(if r.paused { "play (space)" } else { "pause (space)" }).clicked() {
+            actions.push(Action::ReplayPause(!r.paused));
+        }
+        if r.has_camera {
+            let mut follow = r.follow_camera;
+            if ui.checkbox(&mut follow, "trainee's camera").changed() {
+                actions.push(Action::ReplayFollowCamera(follow));
+            }
+        }
+        ui.separator();
+        let last = r.last_step.max(1);
+        let rate = r.rate_hz.max(1.0);
+        let mut step = r.step.min(last);
+        let label = format!("{:.1} s of {:.1} s", step as f32 / rate, last as f32 / rate);
+        ui.spacing_mut().slider_width = (ui.available_width() - 190.0).max(80.0);
+        let slider = egui::Slider::new(&mut step, 0..=last).show_value(false).text(label);
+        let response = ui.add(slider);
+        if response.drag_stopped() || (response.changed() && !response.dragged()) {
+            actions.push(Action::ReplaySeek(step));
+        }
+    });
 }
 
 /// The observer window's panels: the monitor and the assessment on the right, status on top.
@@ -187,6 +296,8 @@ pub struct ObserverUi {
     pub assessment: AssessmentPanel,
     /// Force on the instrument in hand, live.
     pub force: ForcePanel,
+    /// Instructions, checklist, clock.
+    pub exercise: ExercisePanel,
     /// Key bindings.
     pub help: HelpOverlay,
 }
@@ -202,6 +313,8 @@ impl ObserverUi {
                     self.monitor.ui(ui, frame, actions);
                 });
                 egui::ScrollArea::vertical().id_salt("assessment").show(&mut cols[1], |ui| {
+                    ui.heading("Exercise");
+                    self.exercise.ui(ui, frame, actions);
                     ui.heading("Force");
                     self.force.ui(ui, frame, actions);
                     ui.heading("Assessment");

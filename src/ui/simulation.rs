@@ -75,7 +75,9 @@ impl View for SimulationPanel {
         });
         ui.add_enabled_ui(frame.input_enabled, |ui| {
             let mut sweeps = frame.world.config().relax.max_sweeps;
-            if ui.add(egui::Slider::new(&mut sweeps, 0..=64).text("relaxation sweeps / step")).changed() {
+            // A short slider text: the side panel is narrow, and a row wider than it would be clipped.
+            ui.label("relaxation sweeps per step");
+            if ui.add(egui::Slider::new(&mut sweeps, 0..=64).text("sweeps")).changed() {
                 actions.push(Action::SetSweeps(sweeps));
             }
             if let Some(budget) = frame.world.config().relax.max_time {

@@ -68,6 +68,7 @@ pub fn start() {
     };
     let app = WebApp {
         session,
+        educator: params.educator,
         scene_error: error,
         requests,
         pending_gpu: Rc::default(),
@@ -138,6 +139,8 @@ struct State {
 
 struct WebApp {
     session: Session,
+    /// Educator mode (`?educator`): the material and simulation panels.
+    educator: bool,
     /// The last scene that failed to load (shown until a good one).
     scene_error: Option<String>,
     requests: Requests,
@@ -260,6 +263,7 @@ impl WebApp {
 
         let mut actions = Vec::new();
         let assessment = session.assessor().map(|a| a.assessment(session.world()));
+        let advice = session.assessor().and_then(|a| a.advice(session.world()));
         let status = format!("{} · {}", state.backend, session.status());
         let frame = Frame {
             world: &session.view,
@@ -272,6 +276,10 @@ impl WebApp {
             status: &status,
             scene_error: self.scene_error.as_deref(),
             message: session.message(),
+            advice: advice.as_ref(),
+            reload_pending: false,
+            replay: None,
+            educator: self.educator,
         };
         let win = &mut state.win;
         let second = win.second_texture();
@@ -342,11 +350,13 @@ impl WebApp {
                 out.push(Command::SetAxis(state.hand.axis(&state.win.camera.camera)));
             }
             Action::SetInsert(mm) if live => state.hand.tool.insert_mm = mm,
-            Action::SetMaterial(id, m) if live => match m.validate() {
+            Action::SetMaterial(id, m) if live && self.educator => match m.validate() {
                 Ok(()) => session.queue(crate::simulation::Command::SetMaterial(id, m)),
                 Err(e) => session.say(format!("material refused: {e}")),
             },
-            Action::SetSweeps(n) if live => session.queue(crate::simulation::Command::SetRelaxSweeps(n)),
+            Action::SetSweeps(n) if live && self.educator => {
+                session.queue(crate::simulation::Command::SetRelaxSweeps(n))
+            }
             Action::Reload if live => {
                 let (source, label) = (session.source.clone(), session.label.clone());
                 self.switch(&source, &label);

@@ -8,15 +8,18 @@ use wasm_bindgen::JsCast;
 use wasm_bindgen::prelude::Closure;
 
 /// What the page's URL asks for: `?scene=NAME` (a bundled scene), `&script=NAME` (a bundled script to
-/// play), `&source=TEXT` (a scene's text, as a dropped file would give).
+/// play), `&source=TEXT` (a scene's text, as a dropped file would give), `&educator` (the material and
+/// simulation panels, as the native `--educator`).
 #[derive(Clone, Debug, Default)]
 pub struct Params {
-    /// A bundled scene's name (`meninges`), or none for the default.
+    /// A bundled scene's name (`durotomy`, `meninges`), or none for the default.
     pub scene: Option<String>,
     /// A bundled script's name (`meninges_careful`).
     pub script: Option<String>,
     /// A scene's text given in the URL.
     pub source: Option<String>,
+    /// Educator mode.
+    pub educator: bool,
 }
 
 impl Params {
@@ -25,7 +28,12 @@ impl Params {
         let search = web_sys::window().and_then(|w| w.location().search().ok()).unwrap_or_default();
         let Ok(p) = web_sys::UrlSearchParams::new_with_str(&search) else { return Self::default() };
         let get = |k: &str| p.get(k).filter(|s| !s.is_empty());
-        Self { scene: get("scene"), script: get("script"), source: get("source") }
+        Self {
+            scene: get("scene"),
+            script: get("script"),
+            source: get("source"),
+            educator: p.has("educator"),
+        }
     }
 }
 
