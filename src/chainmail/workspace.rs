@@ -4,6 +4,7 @@
 
 use super::body::Body;
 use super::ids::ElementId;
+use super::reaction::SearchScratch;
 use super::simd::SimdLevel;
 use super::stencil::Stencil;
 
@@ -25,14 +26,11 @@ pub struct Workspace {
     pub(crate) lists: Vec<u32>,
     /// Heads and tails of the candidate lists for widths without a specialised path.
     pub(crate) list_ends: Vec<usize>,
-    /// A deformation's seeds: their ids and goals as asked, the ones that move, where those started,
-    /// their goals, and their goals at a share of the move.
+    /// A group deformation's seeds and their goals, as asked.
     pub(crate) seeds: Vec<u32>,
     pub(crate) seed_full: Vec<[f32; 3]>,
-    pub(crate) seed_free: Vec<u32>,
-    pub(crate) seed_starts: Vec<[f32; 3]>,
-    pub(crate) seed_goals: Vec<[f32; 3]>,
-    pub(crate) seed_at: Vec<[f32; 3]>,
+    /// The search for the largest move allowed.
+    pub(crate) search: SearchScratch,
     /// Relaxation's second buffer.
     pub(crate) next: Vec<[f32; 3]>,
     /// The grid tables of the body last fitted (`None` for other lattices), and the body's

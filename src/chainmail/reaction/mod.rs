@@ -70,6 +70,16 @@ pub struct Deformation {
     pub attempts: u32,
 }
 
+/// Scratch of a deformation's search, kept in the workspace so that no step allocates: the seeds
+/// that move, where they started, their goals, and their goals at a share of the move.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct SearchScratch {
+    free: Vec<u32>,
+    starts: Vec<[f32; 3]>,
+    goals: Vec<[f32; 3]>,
+    at: Vec<[f32; 3]>,
+}
+
 /// How a chain reaction ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Outcome {
@@ -158,57 +168,58 @@ impl Body {
         mask: [bool; 3],
     ) -> Deformation {
         ws.fit(self);
-        let Some(&first) = seeds.first() else {
+        let mut scratch = std::mem::take(&mut ws.search);
+        let result = self.search(ws, &mut scratch, seeds, full, mask);
+        if result.fraction == 0.0 {
             ws.next_generation();
-            return Deformation {
-                requested: [0.0; 3],
-                achieved: [0.0; 3],
-                fraction: 0.0,
-                moved: 0,
-                attempts: 0,
-            };
-        };
-        let start = self.pos[first as usize];
+        }
+        ws.search = scratch;
+        result
+    }
+
+    /// [`Body::deform_seeds`] with its scratch taken out of the workspace. A result with a share
+    /// above 0 leaves its moves in place (recorded in the workspace).
+    fn search(
+        &mut self,
+        ws: &mut Workspace,
+        sc: &mut SearchScratch,
+        seeds: &[u32],
+        full: &[[f32; 3]],
+        mask: [bool; 3],
+    ) -> Deformation {
+        let first = seeds.first().copied();
+        let start = first.map_or([0.0; 3], |f| self.pos[f as usize]);
         let requested = full.first().copied().unwrap_or(start);
         let mut result = Deformation { requested, achieved: start, fraction: 0.0, moved: 0, attempts: 0 };
-        // Pinned seeds cannot move; nothing to do if none is free or the move is nothing.
-        let mut starts = std::mem::take(&mut ws.seed_starts);
-        starts.clear();
-        let mut free = std::mem::take(&mut ws.seed_free);
-        free.clear();
-        let mut goals = std::mem::take(&mut ws.seed_goals);
-        goals.clear();
+        // Pinned seeds cannot move, nor need seeds already at their goals.
+        sc.free.clear();
+        sc.starts.clear();
+        sc.goals.clear();
         // The largest move of any seed, per coordinate (what a measured excess is set against).
         let mut delta = [0.0f32; 3];
         for (&s, g) in seeds.iter().zip(full) {
             let p = self.pos[s as usize];
             if self.flags[s as usize] & PINNED == 0 && *g != p {
-                free.push(s);
-                starts.push(p);
-                goals.push(*g);
+                sc.free.push(s);
+                sc.starts.push(p);
+                sc.goals.push(*g);
                 for k in 0..3 {
                     delta[k] = delta[k].max((g[k] - p[k]).abs());
                 }
             }
         }
-        let mut full_goals = goals;
-        if free.is_empty() {
-            ws.next_generation();
-            full_goals.clear();
-            return self.finish_seeds(ws, result, starts, free, full_goals);
-        }
+        let Some(first) = first.filter(|_| !sc.free.is_empty()) else { return result };
         let size = delta.iter().fold(0.0f32, |m, d| m.max(*d));
-        // The seeds' goals at a share `t` of the move (exactly the goals at the full move).
-        let mut goals = std::mem::take(&mut ws.seed_at);
+        // One chain reaction with the seeds a share `t` of their way (exactly the goals at the end).
         let mut attempt = |body: &mut Body, ws: &mut Workspace, t: f32, measure: bool| -> Outcome {
             if t >= 1.0 {
-                return body.chain_reaction(ws, &free, &full_goals, mask, measure);
+                return body.chain_reaction(ws, &sc.free, &sc.goals, mask, measure);
             }
-            goals.clear();
-            for (p, g) in starts.iter().zip(&full_goals) {
-                goals.push([0, 1, 2].map(|c| p[c] + t * (g[c] - p[c])));
+            sc.at.clear();
+            for (p, g) in sc.starts.iter().zip(&sc.goals) {
+                sc.at.push([0, 1, 2].map(|c| p[c] + t * (g[c] - p[c])));
             }
-            body.chain_reaction(ws, &free, &goals, mask, measure)
+            body.chain_reaction(ws, &sc.free, &sc.at, mask, measure)
         };
         // The share of the move at which the fixed elements of a blocked reaction would just stay.
         let estimate = |t: f32, excess: [f32; 3]| -> f32 {
@@ -220,20 +231,16 @@ impl Body {
             }
             t - cut
         };
-        let done = |result: &mut Deformation, ws: &Workspace, t: f32, body: &Body| {
+        let done = |mut result: Deformation, ws: &Workspace, t: f32, body: &Body| {
             result.achieved = body.pos[first as usize];
             result.fraction = t.min(1.0);
             result.moved = ws.moved.len() as u32;
+            result
         };
         result.attempts = 1;
-        let mut hi = 1.0f32;
-        let mut lo = 0.0f32;
+        let (mut lo, mut hi) = (0.0f32, 1.0f32);
         let mut next = match attempt(self, ws, 1.0, true) {
-            Outcome::Done => {
-                done(&mut result, ws, 1.0, self);
-                ws.seed_at = goals;
-                return self.finish_seeds(ws, result, starts, free, full_goals);
-            }
+            Outcome::Done => return done(result, ws, 1.0, self),
             Outcome::Blocked { excess } => estimate(1.0, excess),
         };
         // Shortened by what the blocked reaction measured: usually exact after one try. No element
@@ -245,17 +252,11 @@ impl Body {
                 break; // nothing measured to shorten by: bisect
             }
             if (next - lo) * size <= BISECT_TOLERANCE {
-                ws.next_generation();
-                ws.seed_at = goals;
-                return self.finish_seeds(ws, result, starts, free, full_goals);
+                return result;
             }
             result.attempts += 1;
             match attempt(self, ws, next, true) {
-                Outcome::Done => {
-                    done(&mut result, ws, next, self);
-                    ws.seed_at = goals;
-                    return self.finish_seeds(ws, result, starts, free, full_goals);
-                }
+                Outcome::Done => return done(result, ws, next, self),
                 Outcome::Blocked { excess } => {
                     hi = next;
                     next = estimate(next, excess).min(hi);
@@ -279,28 +280,9 @@ impl Body {
         if lo > 0.0 {
             result.attempts += 1;
             if attempt(self, ws, lo, false) == Outcome::Done {
-                done(&mut result, ws, lo, self);
-                ws.seed_at = goals;
-                return self.finish_seeds(ws, result, starts, free, full_goals);
+                return done(result, ws, lo, self);
             }
         }
-        ws.next_generation();
-        ws.seed_at = goals;
-        self.finish_seeds(ws, result, starts, free, full_goals)
-    }
-
-    /// Gives the search's scratch back to the workspace.
-    fn finish_seeds(
-        &mut self,
-        ws: &mut Workspace,
-        result: Deformation,
-        starts: Vec<[f32; 3]>,
-        free: Vec<u32>,
-        goals: Vec<[f32; 3]>,
-    ) -> Deformation {
-        ws.seed_starts = starts;
-        ws.seed_free = free;
-        ws.seed_goals = goals;
         result
     }
 
