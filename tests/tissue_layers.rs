@@ -167,3 +167,41 @@ fn over_stretching_tears_and_is_counted_apart_from_cuts() {
     assert!(d.links_torn > 0, "nothing tore");
     assert_eq!(d.layer_links_cut + d.connective_links_cut, 0);
 }
+
+/// A held lift past the tent's limit: each step asks for more and the tissue allows nothing. The
+/// tissue remembers a blocked pull while nothing changes and skips the chain reactions that would find
+/// it blocked again; the state must be bit for bit the one found by searching every step, and the
+/// memory must not outlive a change (a lower target moves at once).
+#[test]
+fn a_blocked_lift_stays_blocked_and_is_the_same_as_searching_every_step() {
+    let make = || world_with_grasp(plane(N), [0.0, GAP, 0.0]);
+    let (mut remembered, mut searched) = (make(), make());
+    let e = remembered.instrument().grasped.expect("grasped");
+    let start = remembered.tissue().world_position(e).expect("start");
+    // 15 mm asked in 150 steps: the tent meets the pins 9 mm up, so the last 60 steps are blocked.
+    for s in 1..=150 {
+        let target = [start[0], start[1] + 0.015 * s as f32 / 150.0, start[2]];
+        for (w, forget) in [(&mut remembered, false), (&mut searched, true)] {
+            if forget {
+                // Rewriting a position with itself counts as motion: whatever was remembered is stale.
+                let t = w.tissue_mut();
+                let p = t.body().position(e).expect("grasped element");
+                t.body_mut().set_position(e, p).expect("same position");
+            }
+            w.push(Command::MoveTo(target));
+            w.step();
+        }
+        assert_eq!(
+            remembered.tissue().body().positions(),
+            searched.tissue().body().positions(),
+            "step {s}: skipping a blocked pull changed the state"
+        );
+    }
+    let top = height(remembered.tissue(), e);
+    assert!((TENT_TOP..TENT_TOP + 1e-5).contains(&top), "lift stopped at {top}");
+    assert_eq!(remembered.last_step().moved_normal, 0, "blocked at the end");
+    // A lower target is not covered by the blocked pull: the grasp comes down at once.
+    remembered.push(Command::MoveTo([start[0], top - 0.001, start[2]]));
+    remembered.step();
+    assert!(height(remembered.tissue(), e) < top - 0.0009, "came down to {}", height(remembered.tissue(), e));
+}

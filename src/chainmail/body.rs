@@ -64,6 +64,10 @@ pub struct Body {
     /// Which pins, holds, cuts and materials the body has: a new number on each change, shared only
     /// by clones with the same ones. A workspace's grid tables are rebuilt when it changes.
     pub(crate) revision: u64,
+    /// How often positions changed: a new count whenever any element may have moved (a chain
+    /// reaction that kept moves, a relaxation, a direct write). What a blocked pull measured stays
+    /// true while it and the revision stay the same.
+    pub(crate) motion: u64,
 }
 
 /// A number no earlier call returned (for [`Body::shape`] and [`Body::revision`]).
@@ -134,6 +138,7 @@ impl Body {
             lattice,
             shape: fresh_number(),
             revision: 0,
+            motion: 0,
         };
         for l in 0..m {
             body.update_link_box(l);
@@ -263,12 +268,30 @@ impl Body {
             finite("position", x)?;
         }
         self.pos[e.index()] = p;
+        self.note_motion();
         Ok(())
     }
 
     /// Puts every element back at its rest position (broken links stay broken).
     pub fn reset_to_rest(&mut self) {
         self.pos.copy_from_slice(&self.lattice.rest);
+        self.note_motion();
+    }
+
+    /// Counts a change of positions (see [`Body::motion`]).
+    pub(crate) fn note_motion(&mut self) {
+        self.motion = self.motion.wrapping_add(1);
+    }
+
+    /// The body's motion count: it changes whenever any element may have moved, so two equal
+    /// counts (with equal revisions) mean the same positions.
+    pub fn motion(&self) -> u64 {
+        self.motion
+    }
+
+    /// The body's revision: it changes whenever pins, holds, cuts or materials change.
+    pub fn revision(&self) -> u64 {
+        self.revision
     }
 
     pub(crate) fn check_element(&self, e: ElementId) -> Result<(), ChainMailError> {
@@ -296,6 +319,16 @@ impl Body {
     /// Marks an element as held by an instrument: it moves only as the source of a deformation.
     pub fn set_held(&mut self, e: ElementId, held: bool) -> Result<(), ChainMailError> {
         self.set_flag(e, HELD, held)
+    }
+
+    /// Releases or restores a hold for the length of one pull, without a new revision: the caller
+    /// puts every hold back before anything else reads the body (the forceps' jaws move their centre
+    /// with the rest released, then the rest with the centre held). Chain reactions read the flags
+    /// directly; only the relaxation's tables follow the revision, and no relaxation runs meanwhile.
+    pub(crate) fn set_held_for_pull(&mut self, e: ElementId, held: bool) {
+        if let Some(f) = self.flags.get_mut(e.index()) {
+            if held { *f |= HELD } else { *f &= !HELD }
+        }
     }
 
     fn set_flag(&mut self, e: ElementId, flag: u8, on: bool) -> Result<(), ChainMailError> {

@@ -17,6 +17,75 @@ pub(crate) struct Jaws {
     ids: Vec<ElementId>,
     goals: Vec<[f32; 3]>,
     seen: Vec<bool>,
+    /// The last blocked pull of each pass (indexed by [`Pass`] order: all, plane, normal).
+    pub(crate) blocked: [Option<BlockedPull>; 3],
+}
+
+/// A pull that moved nothing because fixed elements held the tissue: while the body's positions,
+/// pins, holds, cuts and materials stay as they were ([`Body::motion`], [`Body::revision`]), the same
+/// pull, or along the normal any pull further the same way, moves nothing too, and the chain
+/// reactions that would find that out again (several per step, each over the whole tent) are skipped.
+/// A held lift that has reached its limit then costs nothing per step.
+///
+/// [`Body::motion`]: crate::chainmail::Body::motion
+/// [`Body::revision`]: crate::chainmail::Body::revision
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BlockedPull {
+    source: ElementId,
+    /// The source's position and the goal asked for (lattice coordinates).
+    from: [f32; 3],
+    goal: [f32; 3],
+    motion: u64,
+    revision: u64,
+    pub(crate) fraction: f32,
+}
+
+pub(crate) fn pass_index(pass: Pass) -> usize {
+    match pass {
+        Pass::All => 0,
+        Pass::Plane => 1,
+        Pass::Normal => 2,
+    }
+}
+
+impl BlockedPull {
+    pub(crate) fn new(
+        source: ElementId,
+        from: [f32; 3],
+        goal: [f32; 3],
+        body: &crate::chainmail::Body,
+        fraction: f32,
+    ) -> Self {
+        Self { source, from, goal, motion: body.motion(), revision: body.revision(), fraction }
+    }
+
+    /// Whether pulling `source` from `from` to `goal` in `pass` must end as this pull did: the same
+    /// body, the same source where it was, and the same goal (along the normal: a goal at least as
+    /// far the same way, since a larger move asks at least as much of every fixed element).
+    pub(crate) fn covers(
+        &self,
+        source: ElementId,
+        from: [f32; 3],
+        goal: [f32; 3],
+        pass: Pass,
+        body: &crate::chainmail::Body,
+    ) -> bool {
+        if self.source != source
+            || self.from != from
+            || self.motion != body.motion()
+            || self.revision != body.revision()
+        {
+            return false;
+        }
+        let mask = pass.mask();
+        match pass {
+            Pass::Normal => {
+                let (was, now) = (self.goal[2] - from[2], goal[2] - from[2]);
+                was != 0.0 && was.signum() == now.signum() && now.abs() >= was.abs()
+            }
+            _ => (0..3).all(|k| !mask[k] || self.goal[k] == goal[k]),
+        }
+    }
 }
 
 impl Tissue {
@@ -103,7 +172,7 @@ impl Tissue {
         let Some(&(centre, _)) = self.jaws.held.first() else { return (0, 1.0) };
         let held = std::mem::take(&mut self.jaws.held);
         for &(i, _) in &held {
-            let _ = self.body.set_held(i, false);
+            self.body.set_held_for_pull(i, false);
         }
         let (mut moved, mut fraction) = (0u32, 1.0f32);
         if let Ok(d) = self.body.deform(&mut self.ws, centre, t, pass) {
@@ -120,7 +189,7 @@ impl Tissue {
             goals.push([c[0] + off[0], c[1] + off[1], c[2] + off[2]]);
         }
         // The centre holds still while the rest catch up with it.
-        let _ = self.body.set_held(centre, true);
+        self.body.set_held_for_pull(centre, true);
         if let Ok(d) = self.body.deform_group(&mut self.ws, &ids, &goals, pass) {
             moved += d.moved;
             if d.attempts > 0 {
@@ -129,7 +198,7 @@ impl Tissue {
             self.activate_moved();
         }
         for &(i, _) in &held {
-            let _ = self.body.set_held(i, true);
+            self.body.set_held_for_pull(i, true);
         }
         self.jaws.held = held;
         self.jaws.ids = ids;

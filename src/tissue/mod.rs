@@ -427,10 +427,24 @@ impl Tissue {
     pub fn pull_pass(&mut self, e: ElementId, target: [f32; 3], pass: Pass) -> (u32, f32) {
         let Ok(p) = self.body.position(e) else { return (0, 0.0) };
         let t = self.geometry.to_lattice(target, p[0]);
-        if !self.is_fem() && self.jaws.held.len() > 1 && self.jaws.held.first().map(|h| h.0) == Some(e) {
-            return self.pull_jaws(t, pass);
+        if self.is_fem() {
+            return self.displace(e, t, pass);
         }
-        self.displace(e, t, pass)
+        let slot = grasp::pass_index(pass);
+        if let Some(b) = self.jaws.blocked[slot]
+            && b.covers(e, p, t, pass, &self.body)
+        {
+            return (0, b.fraction);
+        }
+        let (moved, fraction) = if self.jaws.held.len() > 1 && self.jaws.held.first().map(|h| h.0) == Some(e)
+        {
+            self.pull_jaws(t, pass)
+        } else {
+            self.displace(e, t, pass)
+        };
+        self.jaws.blocked[slot] =
+            (moved == 0 && fraction < 1.0).then(|| grasp::BlockedPull::new(e, p, t, &self.body, fraction));
+        (moved, fraction)
     }
 
     /// The probe: a ball of `radius` at world point `tip` pushes the surface of the outermost layer

@@ -19,7 +19,7 @@ impl Tissue {
         self.ws.fit(&self.body);
         self.last_move.resize(self.body.element_count(), 0.0);
         let (body, active, last_move) = (&mut self.body, &self.active, &mut self.last_move);
-        crate::chainmail::sweeps_within(budget, || {
+        let report = crate::chainmail::sweeps_within(budget, || {
             let mut change = 0.0f32;
             for &e in active {
                 let i = e.index();
@@ -35,7 +35,11 @@ impl Tissue {
                 body.pos[i] = q;
             }
             change
-        })
+        });
+        if report.sweeps > 0 {
+            body.note_motion();
+        }
+        report
     }
 
     /// Shrinks the disturbed region to the elements still moving and their neighbours (elements put

@@ -35,7 +35,7 @@ pub enum Pass {
 }
 
 impl Pass {
-    const fn mask(self) -> [bool; 3] {
+    pub(crate) const fn mask(self) -> [bool; 3] {
         match self {
             Pass::All => [true; 3],
             Pass::Plane => [true, true, false],
@@ -172,6 +172,9 @@ impl Body {
         let result = self.search(ws, &mut scratch, seeds, full, mask);
         if result.fraction == 0.0 {
             ws.next_generation();
+        }
+        if result.moved > 0 {
+            self.note_motion();
         }
         ws.search = scratch;
         result

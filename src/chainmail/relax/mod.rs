@@ -79,7 +79,11 @@ impl Body {
         mut sweep: impl FnMut(&mut Body, &mut Workspace) -> f32,
     ) -> RelaxReport {
         ws.fit(self);
-        sweeps_within(budget, || sweep(self, ws))
+        let report = sweeps_within(budget, || sweep(self, ws));
+        if report.sweeps > 0 {
+            self.note_motion();
+        }
+        report
     }
 
     fn sweep_all(&mut self, ws: &mut Workspace) -> f32 {
