@@ -502,15 +502,26 @@ impl Tissue {
     ) -> Self {
         let n = body.element_count();
         let (extent_lo, extent_span) = fraction_extent(&geometry, body.lattice().rest_positions());
-        let mut kind_links: Vec<(LinkKind, Vec<u32>)> = Vec::new();
+        let mut by_kind: Vec<(LinkKind, Vec<u32>)> = Vec::new();
         for (l, &kind) in link_kind.iter().enumerate() {
-            match kind_links.iter_mut().find(|(k, _)| *k == kind) {
+            match by_kind.iter_mut().find(|(k, _)| *k == kind) {
                 Some((_, ids)) => ids.push(l as u32),
-                None => kind_links.push((kind, vec![l as u32])),
+                None => by_kind.push((kind, vec![l as u32])),
             }
         }
+        let wrapped = match geometry {
+            Geometry::Surface(s) => s.u_period().is_some(),
+            Geometry::Volume => true,
+        };
+        let kind_links = by_kind
+            .into_iter()
+            .map(|(kind, ids)| (kind, super::link_grid::LinkGrid::new(&body, &ids, wrapped)))
+            .collect();
         let mut tissue = Tissue {
             kind_links,
+            cut_candidates: Vec::new(),
+            drift_max: 0.0,
+            drift_at: None,
             tear_scratch: Vec::new(),
             ws: Workspace::new(&body),
             extent_lo,
@@ -525,6 +536,7 @@ impl Tissue {
             in_active: vec![false; n],
             last_move: vec![0.0; n],
             region_scratch: Vec::with_capacity(n),
+            region_bits: Vec::with_capacity(n.div_ceil(64)),
             settled: false,
             cut_queue: Vec::new(),
             events: Vec::new(),

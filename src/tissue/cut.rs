@@ -82,6 +82,23 @@ impl Tissue {
         self.cut_queue.push(segment);
     }
 
+    /// How far any element has moved from rest across the surface (largest of `|du|`, `|dv|`, lattice
+    /// units), measured again only when the body has moved since it was last measured.
+    fn drift(&mut self) -> f32 {
+        let motion = self.body.motion();
+        if self.drift_at != Some(motion) {
+            let rest = self.body.lattice().rest_positions();
+            self.drift_max = self
+                .body
+                .positions()
+                .iter()
+                .zip(rest)
+                .fold(0.0f32, |m, (p, r)| m.max((p[0] - r[0]).abs()).max((p[1] - r[1]).abs()));
+            self.drift_at = Some(motion);
+        }
+        self.drift_max
+    }
+
     /// Applies every queued cut; returns how many links it severed.
     pub fn apply_cuts(&mut self) -> u32 {
         if let super::Model::Fem(_) = self.model {
@@ -127,10 +144,13 @@ impl Tissue {
                     [a2[0].min(b2[0]) - slack, a2[1].min(b2[1]) - slack],
                     [a2[0].max(b2[0]) + slack, a2[1].max(b2[1]) + slack],
                 );
-                let ids = match self.kind_links.iter().position(|(k, _)| *k == want) {
-                    Some(i) => std::mem::take(&mut self.kind_links[i].1),
-                    None => return 0,
-                };
+                let Some(grid) = self.kind_links.iter().position(|(k, _)| *k == want) else { return 0 };
+                let drift = self.drift();
+                let mut ids = std::mem::take(&mut self.cut_candidates);
+                ids.clear();
+                self.kind_links[grid].1.near(lo, hi, drift, &mut ids);
+                // In id order, as a scan of every link of the kind would cut them.
+                ids.sort_unstable();
                 for &l in &ids {
                     let id = LinkId(l);
                     if !self.body.link_intact(id) {
@@ -162,9 +182,7 @@ impl Tissue {
                         cut += 1;
                     }
                 }
-                if let Some(i) = self.kind_links.iter().position(|(k, _)| *k == want) {
-                    self.kind_links[i].1 = ids;
-                }
+                self.cut_candidates = ids;
             }
             Geometry::Volume => {
                 let height = self
@@ -214,5 +232,73 @@ mod tests {
         assert!(crosses_blade([0.5, 0.8, -0.1], [0.5, 0.8, 0.1], a, b, 0.5));
         assert!(!crosses_blade([0.5, 0.2, -0.1], [0.5, 0.2, 0.1], a, b, 0.5));
         assert!(!crosses_blade([1.5, 0.8, -0.1], [1.5, 0.8, 0.1], a, b, 0.5));
+    }
+
+    /// The link grid visits every link a stroke can reach: after random pulls (which move elements
+    /// far from rest across the plane), random strokes of every depth cut exactly the links a scan
+    /// of every link cuts (the plain path: one cell holding them all).
+    #[test]
+    fn strokes_cut_what_a_scan_of_every_link_cuts() {
+        use crate::chainmail::{ElementId, Material, Pass, RelaxBudget};
+        use crate::surface::Surface;
+        use crate::tissue::{ConnectiveSpec, LayerSpec, LayeredSpec, Pinning, TissueSpec};
+        let layer = |name: &str, offset: f32| LayerSpec {
+            name: name.into(),
+            color: [1.0; 4],
+            offset,
+            material: Material { tear_ratio: None, ..Material::relative(1.3, 0.8, 0.4) },
+        };
+        let spec = TissueSpec::Layered(LayeredSpec {
+            surface: Surface::Plane { width: 0.04, depth: 0.03 },
+            resolution: [41, 31],
+            u_coords: None,
+            v_coords: None,
+            layers: vec![layer("upper", 0.002), layer("lower", 0.0)],
+            connective: Some(ConnectiveSpec {
+                material: Material::relative(2.0, 0.5, 0.5),
+                density: 1.0,
+                min_gap: 0.0,
+            }),
+            pinned: Pinning::Boundary,
+        });
+        let mut seed = 7u64;
+        let mut rng = move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 40) as f32) / ((1u64 << 24) as f32)
+        };
+        for round in 0..6 {
+            let mut fast = Tissue::build(&spec).unwrap_or_else(|e| panic!("{e}"));
+            let mut plain = fast.clone();
+            for (_, grid) in &mut plain.kind_links {
+                let mut all = Vec::new();
+                grid.near([0.0; 2], [0.0; 2], f32::INFINITY, &mut all);
+                *grid = super::super::link_grid::LinkGrid::new(&plain.body, &all, true);
+            }
+            let n = fast.body.element_count();
+            for _ in 0..20 {
+                let e = ElementId((rng() * n as f32) as u32 % n as u32);
+                let p = fast.body.position(e).unwrap_or_else(|e| panic!("{e}"));
+                let goal = [p[0] + 0.008 * (rng() - 0.5), p[1] + 0.008 * (rng() - 0.5), p[2] + 0.004 * rng()];
+                for t in [&mut fast, &mut plain] {
+                    let _ = t.body.deform(&mut t.ws, e, goal, Pass::All);
+                    t.relax_all(RelaxBudget::sweeps(3));
+                }
+            }
+            for k in 0..15 {
+                let depth = [CutDepth::Upper, CutDepth::Between, CutDepth::Lower][k % 3];
+                let a = [0.04 * (rng() - 0.5), 0.0015, 0.03 * (rng() - 0.5)];
+                let b = [a[0] + 0.01 * (rng() - 0.5), 0.0015, a[2] + 0.01 * (rng() - 0.5)];
+                let (cf, cp) = (
+                    fast.cut_segment(&CutSegment { from: a, to: b, depth }),
+                    plain.cut_segment(&CutSegment { from: a, to: b, depth }),
+                );
+                assert_eq!(cf, cp, "round {round}, stroke {k}: links cut");
+            }
+            assert!(
+                fast.damage().connective_links_cut + fast.damage().layer_links_cut > 0,
+                "round {round}: nothing cut"
+            );
+            assert_eq!(fast.events, plain.events, "round {round}: the same links in the same order");
+        }
     }
 }

@@ -17,6 +17,7 @@ mod cut;
 mod fem_drive;
 mod force;
 mod grasp;
+mod link_grid;
 mod mesh;
 mod settle;
 mod spec;
@@ -142,8 +143,15 @@ pub struct Tissue {
     pub(crate) geometry: Geometry,
     pub(crate) layers: Vec<Layer>,
     pub(crate) link_kind: Vec<LinkKind>,
-    /// The links of each kind, in id order (a cut looks only at the kind its depth reaches).
-    pub(crate) kind_links: Vec<(LinkKind, Vec<u32>)>,
+    /// The links of each kind, bucketed where they rest (a cut looks only at the kind its depth
+    /// reaches, and there only near its stroke).
+    pub(crate) kind_links: Vec<(LinkKind, link_grid::LinkGrid)>,
+    /// Links a stroke may reach (scratch of a cut).
+    pub(crate) cut_candidates: Vec<u32>,
+    /// How far any element has drifted from rest across the surface, and at which motion count of
+    /// the body that was measured.
+    pub(crate) drift_max: f32,
+    pub(crate) drift_at: Option<u64>,
     /// Scratch of the tear check: each material's tear ratio, squared.
     pub(crate) tear_scratch: Vec<Option<f32>>,
     /// World rest length of each link, metres (for stretch and tearing).
@@ -158,6 +166,8 @@ pub struct Tissue {
     /// 0 outside the region), for pruning the region.
     pub(crate) last_move: Vec<f32>,
     pub(crate) region_scratch: Vec<ElementId>,
+    /// A bit per element, for putting the region in order.
+    pub(crate) region_bits: Vec<u64>,
     /// The last relaxation converged and nothing has moved since: [`Tissue::end_step`] may forget the
     /// disturbed region.
     pub(crate) settled: bool,

@@ -17,6 +17,7 @@ impl Tissue {
     /// each element's move in the last sweep.
     pub(crate) fn relax_region(&mut self, budget: RelaxBudget) -> RelaxReport {
         self.ws.fit(&self.body);
+        self.order_region();
         self.last_move.resize(self.body.element_count(), 0.0);
         let (body, active, last_move) = (&mut self.body, &self.active, &mut self.last_move);
         let report = crate::chainmail::sweeps_within(budget, || {
@@ -40,6 +41,26 @@ impl Tissue {
             body.note_motion();
         }
         report
+    }
+
+    /// Puts the disturbed region in element order, so that sweeps (and the contact and tear checks
+    /// after them) read memory in order rather than in the order the chain reaction reached it: a
+    /// bit per element, set for the region and read back word by word.
+    fn order_region(&mut self) {
+        let bits = &mut self.region_bits;
+        bits.clear();
+        bits.resize(self.body.element_count().div_ceil(64), 0);
+        for e in &self.active {
+            bits[e.index() / 64] |= 1 << (e.index() % 64);
+        }
+        self.active.clear();
+        for (w, &word) in bits.iter().enumerate() {
+            let mut x = word;
+            while x != 0 {
+                self.active.push(crate::chainmail::ElementId((w * 64) as u32 + x.trailing_zeros()));
+                x &= x - 1;
+            }
+        }
     }
 
     /// Shrinks the disturbed region to the elements still moving and their neighbours (elements put

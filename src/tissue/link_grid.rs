@@ -1,0 +1,112 @@
+//! Where a cut looks: the links of one kind bucketed by where their first end rests in the surface's
+//! `(u, v)` plane, so that a blade stroke visits only the links near it and a cut costs what it
+//! crosses, not the whole sheet. Elements move, so a query widens its box by how far any element has
+//! drifted from rest (measured again whenever the body has moved since the last cut) and by the
+//! longest rest link: every link a stroke can reach is visited, and the links it hits are cut in id
+//! order, exactly as a scan of every link would cut them.
+
+use crate::chainmail::Body;
+
+/// About this many links share a cell.
+const PER_CELL: f32 = 64.0;
+
+/// The links of one kind in cells of a uniform grid over their first ends' rest `(u, v)`.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LinkGrid {
+    lo: [f32; 2],
+    cell: f32,
+    dims: [usize; 2],
+    /// Cell `c`'s links are `ids[start[c]..start[c + 1]]`, cells row by row along `u`.
+    start: Vec<u32>,
+    ids: Vec<u32>,
+    /// The longest rest link of the kind across the plane (largest of `|du|`, `|dv|`).
+    span: f32,
+}
+
+impl LinkGrid {
+    /// Buckets `ids` (links of `body`); `wrapped` surfaces (a `u` that wraps round) get one cell.
+    pub(crate) fn new(body: &Body, ids: &[u32], wrapped: bool) -> Self {
+        let lat = body.lattice();
+        let rest = lat.rest_positions();
+        let mut lo = [f32::INFINITY; 2];
+        let mut hi = [f32::NEG_INFINITY; 2];
+        let mut span = 0.0f32;
+        for &l in ids {
+            let id = crate::chainmail::LinkId(l);
+            let (Some([a, _]), Some(off)) = (lat.link_ends(id), lat.link_rest(id)) else { continue };
+            let p = rest[a.index()];
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+            span = span.max(off[0].abs()).max(off[1].abs());
+        }
+        let extent = [(hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0)];
+        let area = (extent[0] * extent[1]).max(f32::MIN_POSITIVE);
+        let mut cell = (area * PER_CELL / ids.len().max(1) as f32).sqrt();
+        if wrapped || !cell.is_finite() || cell <= 0.0 || !lo[0].is_finite() {
+            cell = f32::INFINITY;
+        }
+        let dims = if cell.is_finite() {
+            [(extent[0] / cell) as usize + 1, (extent[1] / cell) as usize + 1]
+        } else {
+            [1, 1]
+        };
+        let cell_of = |p: [f32; 3]| -> usize {
+            if dims == [1, 1] {
+                return 0;
+            }
+            let i = (((p[0] - lo[0]) / cell) as usize).min(dims[0] - 1);
+            let j = (((p[1] - lo[1]) / cell) as usize).min(dims[1] - 1);
+            j * dims[0] + i
+        };
+        // Counting sort by cell: ids stay in id order within a cell.
+        let mut start = vec![0u32; dims[0] * dims[1] + 1];
+        let cells: Vec<usize> = ids
+            .iter()
+            .map(|&l| lat.link_ends(crate::chainmail::LinkId(l)).map_or(0, |[a, _]| cell_of(rest[a.index()])))
+            .collect();
+        for &c in &cells {
+            start[c + 1] += 1;
+        }
+        for c in 0..dims[0] * dims[1] {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut sorted = vec![0u32; ids.len()];
+        for (&l, &c) in ids.iter().zip(&cells) {
+            sorted[fill[c] as usize] = l;
+            fill[c] += 1;
+        }
+        Self { lo, cell, dims, start, ids: sorted, span }
+    }
+
+    /// Every link whose first end rests within the box `[lo, hi]` widened by `drift` (how far any
+    /// element may have moved from rest across the plane) and by what a link can reach from its first
+    /// end, appended to `out` in no particular order.
+    pub(crate) fn near(&self, lo: [f32; 2], hi: [f32; 2], drift: f32, out: &mut Vec<u32>) {
+        if self.dims == [1, 1] {
+            out.extend_from_slice(&self.ids);
+            return;
+        }
+        // The first end is within `drift` of its rest; the second within `span + 2 drift` of the first.
+        let widen = 3.0 * drift + self.span;
+        let range = |k: usize| -> Option<(usize, usize)> {
+            let a = (lo[k] - widen - self.lo[k]) / self.cell;
+            let b = (hi[k] + widen - self.lo[k]) / self.cell;
+            if !(a.is_finite() && b.is_finite()) {
+                return Some((0, self.dims[k] - 1));
+            }
+            if b < 0.0 || a >= self.dims[k] as f32 {
+                return None;
+            }
+            Some(((a.max(0.0)) as usize, (b as usize).min(self.dims[k] - 1)))
+        };
+        let (Some((i0, i1)), Some((j0, j1))) = (range(0), range(1)) else { return };
+        for j in j0..=j1 {
+            let (s, e) =
+                (self.start[j * self.dims[0] + i0] as usize, self.start[j * self.dims[0] + i1 + 1] as usize);
+            out.extend_from_slice(&self.ids[s..e]);
+        }
+    }
+}
