@@ -11,14 +11,24 @@ use crate::chainmail::{RelaxBudget, RelaxReport};
 /// settled: a tenth of a micrometre, far below what a trainee can see or an instrument feel.
 pub const SETTLED: f32 = 1e-7;
 
+/// Most element updates one step's relaxation makes: a region larger than a sweep's share of this
+/// gets fewer sweeps (never none), so a step costs a bounded amount however much of the sheet a lift
+/// disturbs (about 1 ms on a 2-core AVX2 machine), and the region, kept until it converges, goes on
+/// relaxing over the next steps. Counted in updates, not time, so that runs stay bit for bit
+/// reproducible.
+pub const REGION_UPDATES: usize = 1 << 15;
+
 impl Tissue {
-    /// Damped Gauss-Seidel sweeps over the disturbed region within `budget` (the element update of
+    /// Damped Gauss-Seidel sweeps over the disturbed region within `budget` and [`REGION_UPDATES`]
+    /// (the element update of
     /// [`crate::chainmail::Body::relax_elements`], applied in place in the region's order), noting
     /// each element's move in the last sweep.
     pub(crate) fn relax_region(&mut self, budget: RelaxBudget) -> RelaxReport {
         self.ws.fit(&self.body);
         self.order_region();
         self.last_move.resize(self.body.element_count(), 0.0);
+        let sweeps = (REGION_UPDATES / self.active.len().max(1)).max(1);
+        let budget = RelaxBudget { max_sweeps: budget.max_sweeps.min(sweeps as u32), ..budget };
         let (body, active, last_move) = (&mut self.body, &self.active, &mut self.last_move);
         let report = crate::chainmail::sweeps_within(budget, || {
             let mut change = 0.0f32;
