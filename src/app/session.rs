@@ -545,8 +545,10 @@ impl Session {
     pub fn replay_view(&self) -> Option<CameraSpec> {
         let Driver::Replay { views, .. } = &self.driver else { return None };
         let step = self.world().step_count();
-        let k = views.partition_point(|(s, _)| *s <= step);
-        views.get(k.checked_sub(1)?).map(|(_, c)| *c)
+        // Before the first recorded view, the trainee looked through that one (it is recorded once
+        // the live session's first step has run).
+        let k = views.partition_point(|(s, _)| *s <= step).max(1);
+        views.get(k - 1).map(|(_, c)| *c)
     }
 
     /// Replay: pause or play on.
