@@ -83,19 +83,21 @@ impl Tissue {
     }
 
     /// How far any element has moved from rest across the surface (largest of `|du|`, `|dv|`, lattice
-    /// units), measured again only when the body has moved since it was last measured.
-    fn drift(&mut self) -> f32 {
+    /// units). Kept up to date step by step from the disturbed region, which holds every element a
+    /// step moves; measured over the whole body again only after moves made outside the steps
+    /// (`drift_at` is `None` then).
+    pub(crate) fn drift(&mut self) -> f32 {
         let motion = self.body.motion();
-        if self.drift_at != Some(motion) {
-            let rest = self.body.lattice().rest_positions();
-            self.drift_max = self
-                .body
-                .positions()
-                .iter()
-                .zip(rest)
-                .fold(0.0f32, |m, (p, r)| m.max((p[0] - r[0]).abs()).max((p[1] - r[1]).abs()));
-            self.drift_at = Some(motion);
+        if self.drift_at == Some(motion) {
+            return self.drift_max;
         }
+        let (pos, rest) = (self.body.positions(), self.body.lattice().rest_positions());
+        let off = |i: usize| (pos[i][0] - rest[i][0]).abs().max((pos[i][1] - rest[i][1]).abs());
+        self.drift_max = match self.drift_at {
+            Some(_) => self.active.iter().fold(self.drift_max, |m, e| m.max(off(e.index()))),
+            None => (0..pos.len()).fold(0.0f32, |m, i| m.max(off(i))),
+        };
+        self.drift_at = Some(motion);
         self.drift_max
     }
 
@@ -250,7 +252,7 @@ mod tests {
         };
         let spec = TissueSpec::Layered(LayeredSpec {
             surface: Surface::Plane { width: 0.04, depth: 0.03 },
-            resolution: [41, 31],
+            resolution: [81, 61],
             u_coords: None,
             v_coords: None,
             layers: vec![layer("upper", 0.002), layer("lower", 0.0)],
@@ -269,25 +271,45 @@ mod tests {
         for round in 0..6 {
             let mut fast = Tissue::build(&spec).unwrap_or_else(|e| panic!("{e}"));
             let mut plain = fast.clone();
-            for (_, grid) in &mut plain.kind_links {
-                let mut all = Vec::new();
-                grid.near([0.0; 2], [0.0; 2], f32::INFINITY, &mut all);
-                *grid = super::super::link_grid::LinkGrid::new(&plain.body, &all, true);
-            }
-            let n = fast.body.element_count();
-            for _ in 0..20 {
-                let e = ElementId((rng() * n as f32) as u32 % n as u32);
-                let p = fast.body.position(e).unwrap_or_else(|e| panic!("{e}"));
-                let goal = [p[0] + 0.008 * (rng() - 0.5), p[1] + 0.008 * (rng() - 0.5), p[2] + 0.004 * rng()];
-                for t in [&mut fast, &mut plain] {
-                    let _ = t.body.deform(&mut t.ws, e, goal, Pass::All);
-                    t.relax_all(RelaxBudget::sweeps(3));
+            for (t, wrapped, per_cell) in [(&mut plain, true, 1.0), (&mut fast, false, 2.0)] {
+                for (_, grid) in &mut t.kind_links {
+                    let mut all = Vec::new();
+                    grid.near([0.0; 2], [0.0; 2], f32::INFINITY, &mut all);
+                    *grid =
+                        super::super::link_grid::LinkGrid::with_cells_of(&t.body, &all, wrapped, per_cell);
                 }
             }
-            for k in 0..15 {
+            let n = fast.body.element_count();
+            let mut pulled = Vec::new();
+            for _ in 0..20 {
+                let e = ElementId((rng() * n as f32) as u32 % n as u32);
+                pulled.push(e);
+                let p = fast.body.position(e).unwrap_or_else(|e| panic!("{e}"));
+                let goal = [p[0] + 0.02 * (rng() - 0.5), p[1] + 0.02 * (rng() - 0.5), p[2] + 0.004 * rng()];
+                for t in [&mut fast, &mut plain] {
+                    if round % 2 == 0 {
+                        // Moves outside the steps: the drift is measured over the whole body.
+                        let _ = t.body.deform(&mut t.ws, e, goal, Pass::All);
+                        t.relax_all(RelaxBudget::sweeps(3));
+                    } else {
+                        // Steps: the drift follows the disturbed region.
+                        let world = t.geometry.to_world(goal);
+                        for pass in [Pass::Plane, Pass::Normal] {
+                            t.pull_pass(e, world, pass);
+                        }
+                        t.relax(RelaxBudget::sweeps(3));
+                        t.end_step();
+                    }
+                }
+            }
+            for k in 0..30 {
                 let depth = [CutDepth::Upper, CutDepth::Between, CutDepth::Lower][k % 3];
-                let a = [0.04 * (rng() - 0.5), 0.0015, 0.03 * (rng() - 0.5)];
-                let b = [a[0] + 0.01 * (rng() - 0.5), 0.0015, a[2] + 0.01 * (rng() - 0.5)];
+                // Short strokes where pulled elements are now: the links there lie far from where
+                // they rest.
+                let e = pulled[(rng() * pulled.len() as f32) as usize % pulled.len()];
+                let at = fast.world_position(e).unwrap_or_else(|| panic!("element {e:?}"));
+                let a = [at[0] + 0.001 * (rng() - 0.5), 0.0015, at[2] + 0.001 * (rng() - 0.5)];
+                let b = [a[0] + 0.002 * (rng() - 0.5), 0.0015, a[2] + 0.002 * (rng() - 0.5)];
                 let (cf, cp) = (
                     fast.cut_segment(&CutSegment { from: a, to: b, depth }),
                     plain.cut_segment(&CutSegment { from: a, to: b, depth }),

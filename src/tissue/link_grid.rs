@@ -26,6 +26,12 @@ pub(crate) struct LinkGrid {
 impl LinkGrid {
     /// Buckets `ids` (links of `body`); `wrapped` surfaces (a `u` that wraps round) get one cell.
     pub(crate) fn new(body: &Body, ids: &[u32], wrapped: bool) -> Self {
+        Self::with_cells_of(body, ids, wrapped, PER_CELL)
+    }
+
+    /// [`LinkGrid::new`] with about `per_cell` links a cell (tests use small cells, where a query
+    /// box too small shows).
+    pub(crate) fn with_cells_of(body: &Body, ids: &[u32], wrapped: bool, per_cell: f32) -> Self {
         let lat = body.lattice();
         let rest = lat.rest_positions();
         let mut lo = [f32::INFINITY; 2];
@@ -43,7 +49,7 @@ impl LinkGrid {
         }
         let extent = [(hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0)];
         let area = (extent[0] * extent[1]).max(f32::MIN_POSITIVE);
-        let mut cell = (area * PER_CELL / ids.len().max(1) as f32).sqrt();
+        let mut cell = (area * per_cell / ids.len().max(1) as f32).sqrt();
         if wrapped || !cell.is_finite() || cell <= 0.0 || !lo[0].is_finite() {
             cell = f32::INFINITY;
         }
@@ -89,8 +95,9 @@ impl LinkGrid {
             out.extend_from_slice(&self.ids);
             return;
         }
-        // The first end is within `drift` of its rest; the second within `span + 2 drift` of the first.
-        let widen = 3.0 * drift + self.span;
+        // Both ends lie within `drift` of where they rest, and the second end rests within `span` of
+        // the first: the whole link lies within `span + drift` of its first end's rest position.
+        let widen = drift + self.span;
         let range = |k: usize| -> Option<(usize, usize)> {
             let a = (lo[k] - widen - self.lo[k]) / self.cell;
             let b = (hi[k] + widen - self.lo[k]) / self.cell;

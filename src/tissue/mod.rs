@@ -208,6 +208,7 @@ impl Tissue {
 
     /// Mutable access to the body (materials tuned live, pins changed).
     pub fn body_mut(&mut self) -> &mut Body {
+        self.drift_at = None; // whatever moves through it moves outside the disturbed region
         &mut self.body
     }
 
@@ -506,6 +507,9 @@ impl Tissue {
     /// Closes a step: forgets the disturbed region if the step's relaxation converged and contact
     /// moved nothing afterwards; otherwise shrinks it to what still moves (see `settle.rs`).
     pub fn end_step(&mut self) {
+        if matches!(self.geometry, Geometry::Surface(_)) {
+            self.drift(); // before the region forgets what moved
+        }
         if self.settled {
             for e in self.active.drain(..) {
                 self.in_active[e.index()] = false;
@@ -519,6 +523,7 @@ impl Tissue {
 
     /// Relaxes the whole body within `budget` (for spare time, and for tests).
     pub fn relax_all(&mut self, budget: RelaxBudget) -> crate::chainmail::RelaxReport {
+        self.drift_at = None; // moves outside the disturbed region
         self.body.relax(&mut self.ws, budget, crate::chainmail::RelaxRegion::All)
     }
 
