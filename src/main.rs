@@ -105,12 +105,18 @@ enum Command {
     /// Compare ChainMail with the linear finite-element reference on the same block: surface
     /// displacement error (RMS, relative to the imposed displacement) and time per step of each.
     #[command(
-        after_help = "The block has N x N x N nodes 5 mm apart, its base clamped; its top-centre node is pushed down by\n2% and by 20% of the block's height.\n\nExample:\n  dissect compare --nodes 16 --json out/compare.json"
+        after_help = "The block has N x N x N nodes 5 mm apart, its base clamped; the top nodes within the grasp radius of\nthe top centre are pushed down together by 2% and by 20% of the block's height.\n\nExample:\n  dissect compare --nodes 16 --json out/compare.json\n  dissect compare --nodes 16 --grasp-radius 0 --limits 1.2,0.7,0.3"
     )]
     Compare {
         /// Nodes along each axis of the block (2 to 256; the model refuses more than 512 MiB of matrices).
         #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u16).range(2..=256))]
         nodes: u16,
+        /// Top nodes within this distance of the top centre are grasped, metres (0: one node).
+        #[arg(long, value_name = "M", default_value_t = 0.005)]
+        grasp_radius: f64,
+        /// ChainMail's relative limits: stretch, compress, shear.
+        #[arg(long, value_name = "S,C,SH", value_delimiter = ',', default_values_t = [1.2, 0.7, 0.3])]
+        limits: Vec<f32>,
         /// Also write the report as JSON.
         #[arg(long, value_name = "FILE")]
         json: Option<PathBuf>,
@@ -156,9 +162,18 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             }
             open_app(None, window, dissect::app::Source::Replay(file))
         }
-        Some(Command::Compare { nodes, json }) => {
+        Some(Command::Compare { nodes, grasp_radius, limits, json }) => {
             let n = usize::from(nodes);
-            let cfg = dissect::fem::CompareConfig { dims: [n; 3], ..Default::default() };
+            let &[stretch, compress, shear] = limits.as_slice() else {
+                eprintln!("dissect compare: --limits takes three numbers: stretch,compress,shear");
+                return Ok(ExitCode::FAILURE);
+            };
+            let cfg = dissect::fem::CompareConfig {
+                dims: [n; 3],
+                grasp_radius,
+                chainmail: dissect::chainmail::Material::relative(stretch, compress, shear),
+                ..Default::default()
+            };
             if let Some(path) = &json
                 && let Err(e) = writable_file(path)
             {

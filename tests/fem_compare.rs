@@ -25,6 +25,36 @@ fn compare_runs_on_block_8() {
     assert!(serde_json::to_string(&report).is_ok_and(|s| s.contains("rms_relaxed")));
 }
 
+/// Forces in newtons against the FEM at two resolutions and two block sizes (the same 35 mm block
+/// at 8 and 12 nodes, and a 55 mm block at 12 nodes), with nothing fitted to any of them: at 2 % the
+/// ChainMail springs (`c = E / (2(1 − ν²))`) need within 20 % of the FEM's force on the grasped patch
+/// (the centre and its four neighbours), and the base carries what the patch is pushed with (every
+/// free element balanced by the springs); at 20 % the link limits carry part of the load, so the
+/// FEM's force lies between the patch's springs and the base's reaction.
+#[test]
+fn forces_match_the_fem_at_two_resolutions() {
+    for (nodes, spacing) in [(8, 0.005), (12, 0.035 / 11.0), (12, 0.005)] {
+        let cfg = CompareConfig {
+            dims: [nodes; 3],
+            spacing,
+            grasp_radius: spacing,
+            timing_repeats: 1,
+            ..CompareConfig::default()
+        };
+        let report = compare(&cfg).expect("compare");
+        println!("{report}");
+        assert_eq!(report.grasped_nodes, 5);
+        let n = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let small = &report.rows[0];
+        assert!(small.force_error < 0.2, "{nodes} nodes at {spacing} m: 2 % off by {}", small.force_error);
+        let balance = n(small.chainmail_base_force) / n(small.chainmail_force);
+        assert!((balance - 1.0).abs() < 0.01, "{nodes} nodes: base carries {balance} of the push");
+        let large = &report.rows[1];
+        let (cm, fem, base) = (n(large.chainmail_force), n(large.fem_force), n(large.chainmail_base_force));
+        assert!(cm < fem && fem < base, "{nodes} nodes, 20 %: {cm} < {fem} < {base}");
+    }
+}
+
 #[test]
 fn compare_refuses_bad_config() {
     let bad = CompareConfig { direction: [0.0; 3], ..CompareConfig::default() };

@@ -14,10 +14,16 @@
 //! limits, so the relaxed error measures the graph-Laplacian model against linear elasticity; the
 //! unrelaxed and 10-sweep errors show what the limits give before that.
 //!
-//! Measured on block_16 (release, 2-core box, E = 3 kPa, ν = 0.45, spacing 5 mm): FEM load 2.8 s,
-//! 165 MiB dense; relaxed ChainMail RMS error 0.084 of the imposed displacement (max 0.18) at both 2 %
-//! and 20 %, unrelaxed 0.077 (2 %) and 0.149 (20 %); ChainMail step (deform + 10 sweeps) ≈ 0.43 ms,
-//! FEM step ≈ 2 µs.
+//! The force on the grasped patch (the top nodes within [`CompareConfig::grasp_radius`]) is the FEM's
+//! reaction against ChainMail's springs, each link `c·A/L` on the change of its offset with
+//! `c` = [`ElasticMaterial::lattice_modulus`] (no constant fitted), and the pull of the same springs
+//! on the pinned base.
+//!
+//! Measured on block_16 (release, 2-core box, E = 3 kPa, ν = 0.45, spacing 5 mm, 5 nodes grasped,
+//! 2026-11-24): FEM load 2.8 to 5 s, 165 MiB dense; relaxed ChainMail RMS error 0.133 (2 %) and 0.281
+//! (20 %), unrelaxed 0.141 and 0.152; force 0.0805 N against the FEM's 0.0759 N at 2 % (7 %), 0.240 N
+//! against 0.759 N at 20 % (the links' limits carry the rest to the base: 1.44 N); ChainMail step
+//! (deform + 10 sweeps) ≈ 0.5 to 0.6 ms, FEM step ≈ 10 µs.
 
 use std::fmt;
 use web_time::Instant;
@@ -49,6 +55,11 @@ pub struct CompareConfig {
     pub magnitudes: Vec<f64>,
     /// Direction of the imposed displacement (normalised here). Default `[0, −1, 0]`: pushing down.
     pub direction: [f64; 3],
+    /// The grasped patch: every top node within this distance of the top-centre node (across the top
+    /// face) is imposed the same displacement, as forceps hold a patch of tissue, metres. Default
+    /// 0.005 (the centre and its four neighbours at the default spacing); 0 pushes one node.
+    #[serde(default = "default_grasp_radius")]
+    pub grasp_radius: f64,
     /// Relaxation stops when no element moved more than this fraction of the imposed displacement in a
     /// sweep. Default 1e-6.
     pub relax_tolerance: f64,
@@ -72,6 +83,7 @@ impl Default for CompareConfig {
             chainmail: Material::relative(1.2, 0.7, 0.3),
             magnitudes: vec![0.02, 0.2],
             direction: [0.0, -1.0, 0.0],
+            grasp_radius: default_grasp_radius(),
             relax_tolerance: 1e-6,
             max_sweeps: 20_000,
             step_sweeps: 10,
@@ -79,6 +91,10 @@ impl Default for CompareConfig {
             memory_limit: super::model::DEFAULT_MEMORY_LIMIT,
         }
     }
+}
+
+fn default_grasp_radius() -> f64 {
+    0.005
 }
 
 /// The comparison at one imposed displacement.
@@ -103,14 +119,20 @@ pub struct CompareRow {
     pub sweeps: u32,
     /// Whether relaxation met its tolerance within `max_sweeps`.
     pub converged: bool,
-    /// Force the FEM needs at the node for this displacement, newtons.
+    /// Force the FEM needs on the grasped nodes for this displacement (their sum), newtons.
     pub fem_force: [f64; 3],
-    /// Force ChainMail's springs need at the node (minus their pull on it) after relaxation to
-    /// convergence, newtons: each link a bar of the FEM's Young's modulus and its tributary
-    /// cross-section, as the tissue computes it (`tissue/force.rs`).
+    /// Force ChainMail's springs need on the grasped nodes (minus the pull of the links leaving the
+    /// patch) after relaxation to convergence, newtons: each link a spring `c·A/L` on the change of
+    /// its offset, `c` = [`ElasticMaterial::lattice_modulus`] of the FEM's material, as the tissue
+    /// computes a volume's force (`tissue/force.rs`).
     pub chainmail_force: [f64; 3],
     /// The same after one timed step (`step_sweeps` sweeps), newtons.
     pub chainmail_force_step: [f64; 3],
+    /// What the same springs pull on the pinned base after relaxation to convergence, newtons: equal
+    /// to `chainmail_force` when every free element is balanced by its springs alone, more when link
+    /// limits hold elements where their springs would not (the force then reaches the base through
+    /// the limits).
+    pub chainmail_base_force: [f64; 3],
     /// `|chainmail_force − fem_force| / |fem_force|`.
     pub force_error: f64,
     /// Mean time of one ChainMail step (deformation + `step_sweeps` sweeps), microseconds.
@@ -129,6 +151,8 @@ pub struct CompareReport {
     pub config: CompareConfig,
     /// Free surface nodes over which errors are taken.
     pub surface_nodes: usize,
+    /// Top nodes grasped (imposed the displacement).
+    pub grasped_nodes: usize,
     /// Condensed degrees of freedom of the FEM.
     pub condensed_dofs: usize,
     /// Tetrahedra.
@@ -158,20 +182,25 @@ impl fmt::Display for CompareReport {
         )?;
         writeln!(
             f,
-            "FEM: {} free surface nodes, {} condensed dofs, load {:.2} s, dense {:.1} MiB",
-            self.surface_nodes, self.condensed_dofs, self.fem_load_s, self.fem_dense_mib
+            "FEM: {} free surface nodes, {} condensed dofs, load {:.2} s, dense {:.1} MiB; {} top nodes grasped (within {} m)",
+            self.surface_nodes,
+            self.condensed_dofs,
+            self.fem_load_s,
+            self.fem_dense_mib,
+            self.grasped_nodes,
+            c.grasp_radius
         )?;
         writeln!(f, "errors: RMS over free surface nodes of |u_cm − u_fem| / |imposed|")?;
         writeln!(
             f,
-            "| imposed | achieved | rms unrelaxed | rms {} sweeps | rms relaxed | max relaxed | sweeps | CM step µs | CM converge ms | FEM step µs | FEM force N | CM force N ({} sweeps) | CM force N (relaxed) | force error |",
+            "| imposed | achieved | rms unrelaxed | rms {} sweeps | rms relaxed | max relaxed | sweeps | CM step µs | CM converge ms | FEM step µs | FEM force N | CM force N ({} sweeps) | CM force N (relaxed) | force error | CM base N |",
             c.step_sweeps, c.step_sweeps
         )?;
-        writeln!(f, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
+        writeln!(f, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
         for r in &self.rows {
             writeln!(
                 f,
-                "| {:.0} % ({:.2} mm) | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {}{} | {:.1} | {:.1} | {:.1} | {:.4} | {:.4} | {:.4} | {:.0} % |",
+                "| {:.0} % ({:.2} mm) | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {}{} | {:.1} | {:.1} | {:.1} | {:.4} | {:.4} | {:.4} | {:.0} % | {:.4} |",
                 100.0 * r.fraction_of_height,
                 1000.0 * r.imposed,
                 r.chainmail_achieved,
@@ -187,7 +216,8 @@ impl fmt::Display for CompareReport {
                 norm(r.fem_force),
                 norm(r.chainmail_force_step),
                 norm(r.chainmail_force),
-                100.0 * r.force_error
+                100.0 * r.force_error,
+                norm(r.chainmail_base_force)
             )?;
         }
         Ok(())
@@ -222,43 +252,69 @@ fn errors(model: &FemModel, body: &Body, u_fem: &[f64], scale: f64) -> (f64, f64
     ((sum / nodes.len().max(1) as f64).sqrt() / scale, max / scale)
 }
 
-/// The force needed at element `e` of a ChainMail volume to hold it where it is against its links,
-/// newtons: each link a bar of modulus `young` and the tributary cross-section around it (the square of
-/// a quarter of the perpendicular links' lengths at both ends, summed: `a²` inside a cubic lattice),
-/// the rule `tissue/force.rs` applies to volumes.
-fn spring_force(body: &Body, e: ElementId, young: f64) -> [f64; 3] {
+/// The force needed on a set of elements of a ChainMail volume to hold them where they are against
+/// the links that leave the set, newtons: each link a spring `modulus·A/L` on the change of its
+/// offset from rest, `A` the square of the mean length of the perpendicular links at both ends (`a²`
+/// on a cubic lattice, on its faces too: relaxation weighs every link alike, and so must the springs
+/// whose balance it finds), the rule `tissue/force.rs` applies to volumes.
+fn spring_force(body: &Body, set: &[ElementId], modulus: f64) -> [f64; 3] {
     let lattice = body.lattice();
     let (pos, rest) = (body.positions(), lattice.rest_positions());
     let sub = |a: [f32; 3], b: [f32; 3]| [0, 1, 2].map(|k| f64::from(a[k]) - f64::from(b[k]));
     let len = |d: [f64; 3]| d.iter().map(|x| x * x).sum::<f64>().sqrt();
     let mut f = [0.0; 3];
-    for (n, l) in lattice.neighbours(e) {
-        if !body.link_intact(l) {
-            continue;
-        }
-        let r = sub(rest[n.index()], rest[e.index()]);
-        let rl = len(r);
-        let mut perp = 0.0;
-        for end in [e, n] {
-            for (m, other) in lattice.neighbours(end) {
-                let s = sub(rest[m.index()], rest[end.index()]);
-                let cos = (s[0] * r[0] + s[1] * r[1] + s[2] * r[2]) / (len(s) * rl).max(f64::MIN_POSITIVE);
-                if other != l && cos.abs() < 0.5 {
-                    perp += len(s);
+    for &e in set {
+        for (n, l) in lattice.neighbours(e) {
+            if !body.link_intact(l) || set.contains(&n) {
+                continue;
+            }
+            let r = sub(rest[n.index()], rest[e.index()]);
+            let rl = len(r);
+            let (mut perp, mut count) = (0.0, 0usize);
+            for end in [e, n] {
+                for (m, other) in lattice.neighbours(end) {
+                    let s = sub(rest[m.index()], rest[end.index()]);
+                    let cos =
+                        (s[0] * r[0] + s[1] * r[1] + s[2] * r[2]) / (len(s) * rl).max(f64::MIN_POSITIVE);
+                    if other != l && cos.abs() < 0.5 {
+                        perp += len(s);
+                        count += 1;
+                    }
                 }
             }
-        }
-        let side = perp / 8.0;
-        let k = young * side * side / rl.max(f64::MIN_POSITIVE);
-        let d = sub(pos[n.index()], pos[e.index()]);
-        let dl = len(d).max(f64::MIN_POSITIVE);
-        let s = k * (dl - rl) / dl;
-        // The links pull the element by s·d; holding it there takes the opposite.
-        for x in 0..3 {
-            f[x] -= s * d[x];
+            let side = perp / count.max(1) as f64;
+            let k = modulus * side * side / rl.max(f64::MIN_POSITIVE);
+            let d = sub(pos[n.index()], pos[e.index()]);
+            // The link pulls the element by k·(d − r); holding it there takes the opposite.
+            for x in 0..3 {
+                f[x] -= k * (d[x] - r[x]);
+            }
         }
     }
     f
+}
+
+/// Moves the grasped patch as the tissue's forceps do: the centre to `centre_goal` in a chain
+/// reaction of its own, then the rest to their goals together, the centre held; then all held.
+fn grasp(
+    body: &mut Body,
+    ws: &mut Workspace,
+    held: &[ElementId],
+    goals: &[[f32; 3]],
+    centre_goal: [f32; 3],
+) -> Result<crate::chainmail::Deformation, FemError> {
+    for &e in held {
+        body.set_held(e, false).map_err(chainmail)?;
+    }
+    let def = body.deform(ws, held[0], centre_goal, Pass::All).map_err(chainmail)?;
+    body.set_held(held[0], true).map_err(chainmail)?;
+    if held.len() > 1 {
+        body.deform_group(ws, &held[1..], goals, Pass::All).map_err(chainmail)?;
+    }
+    for &e in held {
+        body.set_held(e, true).map_err(chainmail)?;
+    }
+    Ok(def)
 }
 
 /// Runs the comparison (see the module docs for what is measured and the parameters chosen).
@@ -272,6 +328,9 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
     }
     if cfg.magnitudes.iter().any(|m| !(m.is_finite() && *m > 0.0)) {
         return Err(FemError::BadParameter(format!("magnitudes {:?} must be positive", cfg.magnitudes)));
+    }
+    if !(cfg.grasp_radius.is_finite() && cfg.grasp_radius >= 0.0) {
+        return Err(FemError::BadParameter(format!("grasp_radius {} m must be 0 or more", cfg.grasp_radius)));
     }
     if !(cfg.relax_tolerance.is_finite() && cfg.relax_tolerance >= 0.0) || cfg.timing_repeats == 0 {
         return Err(FemError::BadParameter("relax_tolerance must be ≥ 0 and timing_repeats ≥ 1".into()));
@@ -292,17 +351,34 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
 
     let [nx, ny, nz] = cfg.dims;
     let top = model.mesh().node_at(nx / 2, ny - 1, nz / 2).ok_or(FemError::EmptyGrid { dims: cfg.dims })?;
+    // The grasped patch, its centre first.
+    let mut patch = vec![top];
+    let reach = (cfg.grasp_radius / cfg.spacing).max(0.0) + 1e-9;
+    for k in 0..nz {
+        for i in 0..nx {
+            let (di, dk) = (i as f64 - (nx / 2) as f64, k as f64 - (nz / 2) as f64);
+            if let Some(n) = model.mesh().node_at(i, ny - 1, k)
+                && n != top
+                && (di * di + dk * dk).sqrt() <= reach
+            {
+                patch.push(n);
+            }
+        }
+    }
+    let held: Vec<ElementId> = patch.iter().map(|n| ElementId(n.0)).collect();
+    let modulus = cfg.material.lattice_modulus();
     let lattice = Lattice::volume(nx, ny, nz, cfg.spacing as f32).map_err(chainmail)?;
     let mut body = Body::new(lattice, cfg.chainmail).map_err(chainmail)?;
+    let mut pinned = Vec::new();
     for n in 0..model.mesh().node_count() {
         if model.mesh().grid_position(NodeId(n as u32)).is_some_and(|g| g[1] == 0) {
             body.set_pinned(ElementId(n as u32), true).map_err(chainmail)?;
+            pinned.push(ElementId(n as u32));
         }
     }
-    let source = ElementId(top.0);
-    body.set_held(source, true).map_err(chainmail)?;
     let mut ws = Workspace::new(&body);
-    let rest = body.lattice().rest_positions()[source.index()];
+    let rest = body.lattice().rest_positions().to_vec();
+    let mut goals = vec![[0.0f32; 3]; held.len() - 1];
     let height = (ny - 1) as f64 * cfg.spacing;
     let mut u = vec![0.0; model.condensed_dofs()];
 
@@ -310,13 +386,17 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
     for &fraction in &cfg.magnitudes {
         let imposed = fraction * height;
         let d = dir.map(|x| x * imposed);
-        let target = [0, 1, 2].map(|k| rest[k] + d[k] as f32);
+        let moved = |e: ElementId| [0, 1, 2].map(|k| rest[e.index()][k] + d[k] as f32);
+        for (g, &e) in goals.iter_mut().zip(&held[1..]) {
+            *g = moved(e);
+        }
+        let imposed_nodes: Vec<(NodeId, [f64; 3])> = patch.iter().map(|&n| (n, d)).collect();
 
         // FEM: the reference answer, then its timing.
-        let forces = model.impose(&[(top, d)], &mut u)?;
+        let forces = model.impose(&imposed_nodes, &mut u)?;
         let t = Instant::now();
         for _ in 0..cfg.timing_repeats {
-            model.impose(std::hint::black_box(&[(top, d)]), &mut u)?;
+            model.impose(std::hint::black_box(&imposed_nodes), &mut u)?;
         }
         let fem_step_us = t.elapsed().as_secs_f64() * 1e6 / cfg.timing_repeats as f64;
 
@@ -325,17 +405,17 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
         for _ in 0..cfg.timing_repeats {
             body.reset_to_rest();
             let t = Instant::now();
-            body.deform(&mut ws, source, target, Pass::All).map_err(chainmail)?;
+            grasp(&mut body, &mut ws, &held, &goals, moved(held[0]))?;
             body.relax(&mut ws, RelaxBudget::sweeps(cfg.step_sweeps), RelaxRegion::All);
             step_time += t.elapsed().as_secs_f64();
         }
         let (rms_step, _) = errors(&model, &body, &u, imposed);
-        let chainmail_force_step = spring_force(&body, source, cfg.material.young);
+        let chainmail_force_step = spring_force(&body, &held, modulus);
 
         // ChainMail: the chain reaction alone, then relaxation to convergence.
         body.reset_to_rest();
         let t = Instant::now();
-        let def = body.deform(&mut ws, source, target, Pass::All).map_err(chainmail)?;
+        let def = grasp(&mut body, &mut ws, &held, &goals, moved(held[0]))?;
         let (rms_unrelaxed, _) = errors(&model, &body, &u, imposed);
         let t_unrelaxed = t.elapsed();
         let t = Instant::now();
@@ -347,8 +427,10 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
         let report = body.relax(&mut ws, budget, RelaxRegion::All);
         let converge = t_unrelaxed + t.elapsed();
         let (rms_relaxed, max_relaxed) = errors(&model, &body, &u, imposed);
-        let chainmail_force = spring_force(&body, source, cfg.material.young);
-        let fem_force = forces.first().copied().unwrap_or([0.0; 3]);
+        let chainmail_force = spring_force(&body, &held, modulus);
+        let base = spring_force(&body, &pinned, modulus);
+        let chainmail_base_force = base.map(|x| -x);
+        let fem_force = forces.iter().fold([0.0; 3], |s, f| [0, 1, 2].map(|k| s[k] + f[k]));
         let diff = (0..3).map(|k| (chainmail_force[k] - fem_force[k]).powi(2)).sum::<f64>().sqrt();
         let scale = fem_force.iter().map(|x| x * x).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
         rows.push(CompareRow {
@@ -364,6 +446,7 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
             fem_force,
             chainmail_force,
             chainmail_force_step,
+            chainmail_base_force,
             force_error: diff / scale,
             chainmail_step_us: step_time * 1e6 / cfg.timing_repeats as f64,
             chainmail_converge_ms: converge.as_secs_f64() * 1e3,
@@ -373,6 +456,7 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
     Ok(CompareReport {
         config: cfg.clone(),
         surface_nodes: model.surface_nodes().len(),
+        grasped_nodes: patch.len(),
         condensed_dofs: model.condensed_dofs(),
         tets,
         fem_load_s,

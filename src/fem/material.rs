@@ -62,6 +62,22 @@ impl ElasticMaterial {
         (e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)))
     }
 
+    /// The modulus `c` of a lattice of difference springs equivalent to this material at a loaded
+    /// surface, pascals: `c = μ / (1 − ν) = E / (2(1 − ν²))`.
+    ///
+    /// A link of rest offset `L` and tributary cross-section `A` is then a spring of `c·A/L` pulling
+    /// its ends' displacements together (`k·(u_b − u_a)`, in every direction: the energy ChainMail's
+    /// relaxation minimises); on a cubic lattice of spacing `a`, `k = c·a`. Each displacement
+    /// component of such a lattice is a harmonic field of conductivity `c`: under a force `F` normal
+    /// to a half-space's surface it sinks by `F / (2π c r)` at distance `r`, where Boussinesq's
+    /// elastic half-space sinks by `F (1 − ν) / (2π μ r)`; a rigid disc of radius `R` pressed by `w`
+    /// takes `4 c R w` in the lattice and `2 E R w / (1 − ν²)` in the solid. Both agree when
+    /// `c = μ / (1 − ν)`, with no constant fitted to a mesh.
+    pub fn lattice_modulus(&self) -> f64 {
+        let nu = self.poisson;
+        self.young / (2.0 * (1.0 - nu * nu))
+    }
+
     /// The material matrix `D` for strains in Voigt order `(εxx, εyy, εzz, γxy, γyz, γzx)` with
     /// engineering shear strains.
     pub fn d_matrix(&self) -> [[f64; 6]; 6] {

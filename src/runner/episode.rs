@@ -176,11 +176,14 @@ impl Episode {
         self.pending.last_mut()
     }
 
-    /// Whether a script has played everything (a live episode never finishes).
+    /// Whether a script has played everything (a live episode never finishes, nor one told to run
+    /// past its script's end: [`Episode::step`] goes on stepping it).
     pub fn finished(&self) -> bool {
         match &self.source {
             Source::Live => false,
-            Source::Script(player) => player.finished() && self.world.pending().is_empty(),
+            Source::Script(player) => {
+                !self.run_past_end && player.finished() && self.world.pending().is_empty()
+            }
         }
     }
 
@@ -262,6 +265,34 @@ impl Episode {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn scripted(actions: Vec<crate::scene::Action>) -> Episode {
+        let scene = crate::scene::Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/volume.ron"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let world = scene.build_world(false).unwrap_or_else(|e| panic!("{e}"));
+        Episode::new(world, None, Source::Script(Player::new(actions)))
+    }
+
+    #[test]
+    fn finished_agrees_with_step_past_the_end() {
+        let actions = vec![crate::scene::Action::Wait(3)];
+        // Without running past the end: finished once the script is played, and no step then.
+        let mut e = scripted(actions.clone());
+        assert!(!e.finished());
+        while e.step().is_some() {}
+        assert!(e.finished());
+        assert!(e.step().is_none());
+        // Running past the end: steps go on, so it is never finished.
+        let mut e = scripted(actions);
+        e.run_past_end(true);
+        for _ in 0..10 {
+            assert!(e.step().is_some());
+            assert!(!e.finished(), "step {}", e.world().step_count());
+        }
+        // Told to stop running past it, it is finished at once.
+        e.run_past_end(false);
+        assert!(e.finished());
+    }
 
     #[test]
     fn an_episode_can_move_to_another_thread() {

@@ -1,10 +1,14 @@
 //! The force gauge: every step, the force the tissue exerts on each instrument, in newtons (see
 //! `tissue/force.rs` for the springs behind it).
 //!
-//! - Forceps: the pull of their links on the elements held (also while clamped and another
-//!   instrument is in hand), plus, where the tissue would not follow the jaws (ChainMail holds every
-//!   link within its limits, so the held element stops short of the hand), the links' stiffness times
-//!   the distance it fell short: the tissue resists being pulled further than it can stretch.
+//! - Forceps: the pull of the links that leave the patch the jaws hold (links within it cancel, so
+//!   the force does not depend on how many elements the jaws' width takes at a given spacing), also
+//!   while clamped and another instrument is in hand, plus, where the tissue would not follow the
+//!   jaws (ChainMail holds every link within its limits, so the patch stops short of the hand), the
+//!   tissue's stiffness at the patch times the distance it fell short: the tissue resists being pulled
+//!   further than it can stretch. That stiffness is the material's at the scale of the jaws and the
+//!   tissue ([`Tissue::patch_stiffness`]), not a sum over the patch's links, whose count grows with
+//!   the resolution.
 //! - Probe: the push-back of the links of the element it presses on, while it touches the tissue.
 //! - Scalpel: the cutting resistance, the energy spent cutting over the distance the blade travelled,
 //!   both smoothed over [`CUT_WINDOW_S`] so that links cut one at a time give a steady force; it points
@@ -65,22 +69,52 @@ pub(crate) struct ForceGauge {
     /// Direction of the blade's last move (unit).
     heading: [f32; 3],
     last_target: Option<[f32; 3]>,
+    /// The elements the jaws hold (scratch, refilled every step).
+    held: Vec<crate::chainmail::ElementId>,
+    /// The tissue's stiffness at the grasped patch, N/m, and the element it was measured around.
+    patch: Option<(crate::chainmail::ElementId, f32)>,
 }
 
 impl ForceGauge {
     /// The forces after a step of `dt` seconds.
-    pub(crate) fn measure(&mut self, tissue: &mut Tissue, inst: &Instrument, dt: f32) -> Forces {
+    pub(crate) fn measure(
+        &mut self,
+        tissue: &mut Tissue,
+        inst: &Instrument,
+        jaw_width: f32,
+        dt: f32,
+    ) -> Forces {
         let mut out = Forces { in_hand: inst.kind, ..Forces::default() };
         if let Some(e) = inst.grasped {
-            let f = tissue.force_on(&[e]);
+            self.held.clear();
+            self.held.extend(tissue.held());
+            if self.held.is_empty() {
+                self.held.push(e);
+            }
+            let f = tissue.force_on(&self.held);
             // Only while the forceps are in hand: a clamp left on the tissue stays where it is.
             let short = if inst.kind == InstrumentKind::Forceps {
                 [0, 1, 2].map(|k| inst.target[k] - inst.tip[k])
             } else {
                 [0.0; 3]
             };
-            let k = if short == [0.0; 3] || tissue.is_fem() { 0.0 } else { tissue.stiffness_at(&[e]) };
+            let k = if short == [0.0; 3] || tissue.is_fem() {
+                0.0
+            } else {
+                match self.patch {
+                    Some((c, k)) if c == e => k,
+                    _ => {
+                        let k = tissue.patch_stiffness(e, 0.5 * jaw_width);
+                        self.patch = Some((e, k));
+                        k
+                    }
+                }
+            };
             out.forceps = [0, 1, 2].map(|i| f[i] - k * short[i]);
+        }
+        if inst.grasped.is_none() {
+            // Measured again at the next grasp (materials may have changed meanwhile).
+            self.patch = None;
         }
         if inst.kind == InstrumentKind::Probe
             && let Some(e) = tissue.probe_contact()

@@ -316,7 +316,7 @@ impl World {
         // Forces on the instruments, from the links of what they touch.
         let t = Instant::now();
         let dt = self.step_seconds() as f32;
-        self.forces = self.gauge.measure(&mut self.tissue, &self.instrument, dt);
+        self.forces = self.gauge.measure(&mut self.tissue, &self.instrument, self.config.sizes.jaw_width, dt);
         c.phase_us[6] = ms(t);
 
         // Bookkeeping.

@@ -9,7 +9,14 @@
 //!   than push: only tension counts.
 //! - A connective fibre of length `L` stands for the connective tissue over its elements' area `A`
 //!   (divided by the fibres' density): `E·A/L`, tension only.
-//! - A volume's link stands for the cross-section `A` around it: `E·A/L`, in tension and compression.
+//! - A volume's link stands for the cross-section `A` around it and is the spring of the energy
+//!   relaxation minimises: `k·(Δx − ΔX)`, the change of its offset from rest, in every direction
+//!   (compression and shear too), with `k = c·A/L` (`A` the square of the mean perpendicular link:
+//!   `a²` on a cubic lattice, faces included) and `c = E / (2(1 − ν²))`
+//!   ([`ElasticMaterial::lattice_modulus`]: the lattice's surface response is then Boussinesq's),
+//!   ν = [`VOLUME_POISSON`]. Relaxed, every free element is balanced by these springs, so the force on
+//!   what an instrument holds is the whole body's reaction; `dissect compare` checks it against the
+//!   finite-element reference on the same block.
 //!
 //! The force on a set of elements is the sum of their links' forces (links between two elements of the
 //! set cancel), read only from those elements: nothing here walks the body. Cutting a link costs its
@@ -20,6 +27,11 @@
 
 use super::{Geometry, LinkKind, Model, Tissue};
 use crate::chainmail::{ElementId, LinkId};
+use crate::fem::ElasticMaterial;
+
+/// Poisson's ratio of a ChainMail volume's tissue (its material carries only `E`): soft tissue is
+/// nearly incompressible.
+pub const VOLUME_POISSON: f64 = 0.45;
 
 /// Each link's geometric factor: `k = E·t·factor` for a layer on a surface, `E·factor` otherwise.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -38,7 +50,7 @@ enum Spring {
     Membrane,
     /// A connective fibre: `E·A/L`, tension only.
     Fibre,
-    /// A bar of a solid: `E·A/L`, tension and compression.
+    /// A link of a solid: `c·A/L` on the change of its offset, every direction.
     Solid,
 }
 
@@ -71,7 +83,7 @@ impl LinkFactors {
             let len = norm(r).max(f32::MIN_POSITIVE);
             // Links roughly perpendicular to this one at either end: half of each on either side make
             // up the tributary width (a layer) or the side of the tributary square (fibres, volumes).
-            let mut perp = 0.0;
+            let (mut perp, mut count) = (0.0, 0u32);
             for end in [a, b] {
                 for (n, m) in lattice.neighbours(end) {
                     let other = tissue.link_kind[m.index()];
@@ -84,6 +96,7 @@ impl LinkFactors {
                     let cos = (s[0] * r[0] + s[1] * r[1] + s[2] * r[2]) / (sl * len).max(f32::MIN_POSITIVE);
                     if cos.abs() < 0.5 {
                         perp += sl;
+                        count += 1;
                     }
                 }
             }
@@ -100,7 +113,9 @@ impl LinkFactors {
                     *c = len * area.sqrt();
                 }
                 Spring::Solid => {
-                    let side = perp / 8.0;
+                    // The mean perpendicular link, on the faces too: relaxation weighs every link
+                    // alike, and the springs must be those it balances.
+                    let side = perp / count.max(1) as f32;
                     *f = side * side / len;
                     *c = side * side;
                 }
@@ -108,6 +123,12 @@ impl LinkFactors {
         }
         Self { factor, cut }
     }
+}
+
+/// The modulus of a volume's lattice, pascals ([`ElasticMaterial::lattice_modulus`] at
+/// [`VOLUME_POISSON`]).
+fn volume_modulus(young: f32) -> f32 {
+    ElasticMaterial::new(f64::from(young), VOLUME_POISSON).lattice_modulus() as f32
 }
 
 fn spring(tissue: &Tissue, kind: LinkKind) -> Spring {
@@ -128,15 +149,26 @@ impl Tissue {
         let Some(m) = self.body.link_material(l).and_then(|m| self.body.material(m)) else { return 0.0 };
         match spring(self, kind) {
             Spring::Membrane => m.young_modulus * m.thickness * g,
-            Spring::Fibre | Spring::Solid => m.young_modulus * g,
+            Spring::Fibre => m.young_modulus * g,
+            Spring::Solid => volume_modulus(m.young_modulus) * g,
         }
     }
 
     /// The force an intact link exerts on its element `from`, newtons (world axes): towards the other
-    /// end when stretched, away from it when a solid's link is compressed; zero for a broken link.
+    /// end when a membrane or fibre is stretched; for a solid's link, towards restoring its rest
+    /// offset; zero for a broken link.
     fn link_force_on(&self, l: LinkId, from: ElementId, to: ElementId) -> [f32; 3] {
         if !self.body.link_intact(l) {
             return [0.0; 3];
+        }
+        if spring(self, self.link_kind[l.index()]) == Spring::Solid {
+            // A volume's lattice coordinates are world coordinates.
+            let (Some(d), Some(r)) = (self.body.link_offset(l), self.body.lattice().link_rest(l)) else {
+                return [0.0; 3];
+            };
+            let first = self.body.lattice().link_ends(l).is_some_and(|[a, _]| a == from);
+            let k = if first { self.link_stiffness(l) } else { -self.link_stiffness(l) };
+            return [0, 1, 2].map(|i| k * (d[i] - r[i]));
         }
         let (Some(pa), Some(pb)) = (self.world_position(from), self.world_position(to)) else {
             return [0.0; 3];
@@ -144,11 +176,7 @@ impl Tissue {
         let d = sub(pb, pa);
         let len = norm(d);
         let rest = self.rest_len.get(l.index()).copied().unwrap_or(len);
-        let mut extension = len - rest;
-        let kind = self.link_kind[l.index()];
-        if spring(self, kind) != Spring::Solid {
-            extension = extension.max(0.0);
-        }
+        let extension = (len - rest).max(0.0);
         if extension == 0.0 || len <= 0.0 {
             return [0.0; 3];
         }
@@ -157,7 +185,8 @@ impl Tissue {
     }
 
     /// Tension of a link, newtons: positive when it pulls its ends together, negative when a solid's
-    /// link pushes them apart, zero when broken or slack.
+    /// link pushes them apart, zero when broken or slack (along the link: a solid's shear is left
+    /// out).
     pub fn link_tension(&self, l: LinkId) -> f32 {
         let Some([a, b]) = self.body.lattice().link_ends(l) else { return 0.0 };
         let (Some(pa), Some(pb)) = (self.world_position(a), self.world_position(b)) else { return 0.0 };
@@ -165,8 +194,8 @@ impl Tissue {
         (f[0] * d[0] + f[1] * d[1] + f[2] * d[2]) / norm(d).max(f32::MIN_POSITIVE)
     }
 
-    /// The force the tissue exerts on a set of elements, newtons (world axes): the sum of their intact
-    /// links' forces, those between two elements of the set cancelling. What forceps holding `held`
+    /// The force the tissue exerts on a set of elements, newtons (world axes): the sum of the forces
+    /// of the intact links that leave the set (those between two of its elements cancel). What forceps holding `held`
     /// feel, or a probe pressing on them. A finite-element tissue reports its model's reaction at the
     /// node it last drove instead.
     pub fn force_on(&self, held: &[ElementId]) -> [f32; 3] {
@@ -176,6 +205,9 @@ impl Tissue {
         let mut f = [0.0f32; 3];
         for &e in held {
             for (n, l) in self.body.lattice().neighbours(e) {
+                if held.contains(&n) {
+                    continue;
+                }
                 let g = self.link_force_on(l, e, n);
                 f = [f[0] + g[0], f[1] + g[1], f[2] + g[2]];
             }
@@ -183,14 +215,40 @@ impl Tissue {
         f
     }
 
-    /// Sum of the spring constants of a set of elements' intact links, newtons per metre: how stiffly
-    /// the tissue resists moving them further.
-    pub fn stiffness_at(&self, held: &[ElementId]) -> f32 {
-        held.iter()
-            .flat_map(|&e| self.body.lattice().neighbours(e))
-            .filter(|&(_, l)| self.body.link_intact(l))
-            .map(|(_, l)| self.link_stiffness(l))
-            .sum()
+    /// How stiffly the tissue resists moving a held patch of radius `radius` (metres) around
+    /// `centre` further as one, newtons per metre, from the material and the tissue's size rather than
+    /// its elements (so the same at every spacing): for a layer, the annulus of membrane between the
+    /// patch and the nearest pinned element at `R_out`, `2π·E·t / ln(R_out / radius)` (plane stress,
+    /// ν = 0, `R_out` at least twice the radius); for a volume, a rigid punch on the lattice,
+    /// `4·c·radius`. Walks every element once (pins): call it once per grasp, not every step.
+    pub fn patch_stiffness(&self, centre: ElementId, radius: f32) -> f32 {
+        let radius = radius.max(f32::MIN_POSITIVE);
+        // The stiffest material among the centre's own (not connective) links.
+        let modulus = |scale: &dyn Fn(&crate::chainmail::Material) -> f32| {
+            self.body
+                .lattice()
+                .neighbours(centre)
+                .filter(|&(_, l)| self.link_kind.get(l.index()).is_some_and(|k| *k != LinkKind::Connective))
+                .filter_map(|(_, l)| self.body.link_material(l).and_then(|m| self.body.material(m)))
+                .map(scale)
+                .fold(0.0f32, f32::max)
+        };
+        match self.geometry {
+            Geometry::Volume => 4.0 * radius * modulus(&|m| volume_modulus(m.young_modulus)),
+            Geometry::Surface(_) => {
+                let rest = self.body.lattice().rest_positions();
+                let Some(&c) = rest.get(centre.index()) else { return 0.0 };
+                let c = self.geometry.to_world(c);
+                let mut nearest = f32::INFINITY;
+                for (i, &r) in rest.iter().enumerate() {
+                    if self.body.is_pinned(ElementId(i as u32)) {
+                        nearest = nearest.min(norm(sub(self.geometry.to_world(r), c)));
+                    }
+                }
+                let ratio = (nearest / radius).clamp(2.0, 1.0e6);
+                std::f32::consts::TAU * modulus(&|m| m.young_modulus * m.thickness) / ratio.ln()
+            }
+        }
     }
 
     /// Energy needed to cut a link, joules: its material's toughness times the area the blade cuts.
@@ -275,6 +333,20 @@ mod tests {
             // Length of the column (rest, between the corners' half cells): (n - 2) cells of 0.04/(n-1).
             let expected = 1.0e6 * 1.0e-3 * 0.1 * 0.04 * (n - 2) as f32 / (n - 1) as f32;
             assert!((-f[0] - expected).abs() < 0.02 * expected, "{n}: {f:?} against {expected}");
+        }
+    }
+
+    #[test]
+    fn a_patch_is_as_stiff_at_any_spacing() {
+        let m = Material { young_modulus: 2.0e6, thickness: 5.0e-4, ..Material::default() };
+        let k: Vec<f32> = [17, 33, 65]
+            .iter()
+            .map(|&n| sheet(n, m).patch_stiffness(ElementId((n / 2 + n * (n / 2)) as u32), 0.001))
+            .collect();
+        // The annulus from the jaws (1 mm) to the pinned edge (20 mm): 2π·E·t / ln 20.
+        let expected = std::f32::consts::TAU * 1000.0 / 20.0f32.ln();
+        for x in &k {
+            assert!((x - expected).abs() < 1e-3 * expected, "{k:?} against {expected}");
         }
     }
 
