@@ -20,13 +20,40 @@ struct VsOut {
     @location(3) region: vec2<f32>,
 };
 
-// Signed distance from uv to region k's edge (negative inside).
-fn region_distance(k: i32, uv: vec2<f32>) -> f32 {
-    let r = camera.regions[k];
-    if camera.region_kinds[k] > 2.5 {
-        return length(uv - r.xy) - r.z;
-    }
-    return max(max(r.x - uv.x, uv.x - r.y), max(r.z - uv.y, uv.y - r.w));
+// Signed distances from uv to the nearest target and forbidden region's edge (negative inside; 10
+// when there is none), over the four regions at once. Branch-free on purpose: the same computation
+// written as a loop over the regions, or as one `if` per region, made Mesa's lavapipe 22.3 (software
+// Vulkan) keep memory on every draw of the tissue and never give it back: the trainer grew by 5 to
+// 8 MB a second there (see the README's "Memory" paragraph and `examples/present_loop.rs`).
+fn region_distances(uv: vec2<f32>) -> vec2<f32> {
+    let kinds = camera.region_kinds;
+    let r0 = camera.regions[0];
+    let r1 = camera.regions[1];
+    let r2 = camera.regions[2];
+    let r3 = camera.regions[3];
+    // Rectangles (u0, u1, v0, v1): the larger of the distances outside each edge.
+    let rect = vec4<f32>(
+        max(max(r0.x - uv.x, uv.x - r0.y), max(r0.z - uv.y, uv.y - r0.w)),
+        max(max(r1.x - uv.x, uv.x - r1.y), max(r1.z - uv.y, uv.y - r1.w)),
+        max(max(r2.x - uv.x, uv.x - r2.y), max(r2.z - uv.y, uv.y - r2.w)),
+        max(max(r3.x - uv.x, uv.x - r3.y), max(r3.z - uv.y, uv.y - r3.w)),
+    );
+    // Discs (cu, cv, radius).
+    let disc = vec4<f32>(
+        length(uv - r0.xy) - r0.z,
+        length(uv - r1.xy) - r1.z,
+        length(uv - r2.xy) - r2.z,
+        length(uv - r3.xy) - r3.z,
+    );
+    let none = vec4<f32>(10.0);
+    let d = select(select(rect, disc, kinds > vec4<f32>(2.5)), none, kinds < vec4<f32>(0.5));
+    let forbidden = (kinds > vec4<f32>(1.5) & kinds < vec4<f32>(2.5)) | kinds > vec4<f32>(3.5);
+    let target_d = select(d, none, forbidden);
+    let forbidden_d = select(none, d, forbidden);
+    return vec2<f32>(
+        min(min(target_d.x, target_d.y), min(target_d.z, target_d.w)),
+        min(min(forbidden_d.x, forbidden_d.y), min(forbidden_d.z, forbidden_d.w)),
+    );
 }
 
 @vertex
@@ -40,22 +67,7 @@ fn vs_tissue(
     out.normal = normal;
     out.uv = uv;
     out.clip = camera.view_proj * vec4<f32>(position, 1.0);
-    // Regions per vertex: the loop runs once per vertex, not per pixel.
-    var target_d = 10.0;
-    var forbidden_d = 10.0;
-    for (var k = 0; k < 4; k = k + 1) {
-        let kind = camera.region_kinds[k];
-        if kind < 0.5 {
-            continue;
-        }
-        let d = region_distance(k, uv);
-        if kind > 1.5 && kind < 2.5 || kind > 3.5 {
-            forbidden_d = min(forbidden_d, d);
-        } else {
-            target_d = min(target_d, d);
-        }
-    }
-    out.region = vec2<f32>(target_d, forbidden_d);
+    out.region = region_distances(uv);
     return out;
 }
 
