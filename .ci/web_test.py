@@ -10,8 +10,10 @@ Checks (exit status 1 on the first failure):
   2. ?scene=meninges&script=meninges_careful finishes with the links cut and the score of the native
      `dissect run` (metrics.json given), the score to 0.1;
   3. a broken scene opened through the page's file picker shows the same `file:line:column` error as
-     native `dissect check`.
-Writes default.png, script.png and broken.png into OUTDIR and prints the figures.
+     native `dissect check`;
+  4. the mouse and keyboard work the instruments: key 1 takes the forceps and a left drag in the
+     trainee's view grasps the tissue and lifts it (the page's `data-live`).
+Writes default.png, mouse.png, script.png and broken.png into OUTDIR and prints the figures.
 """
 
 import base64
@@ -167,6 +169,49 @@ def check_views(cdp, png, label):
             raise RuntimeError(f"{label}: the {name} view looks blank (spread {spread:.1f}, {colours} colours)")
 
 
+def check_mouse(cdp, outdir):
+    """Drives the default scene with the mouse and keyboard, as a trainee does, through DevTools' input
+    events: a click on the side panel gives the canvas the focus, key 1 takes the forceps, a left drag
+    from the trainee view's middle upwards grasps the tissue and lifts it. The page's `data-live`
+    (instrument, grasp, elements moved, links cut) must show the forceps holding tissue that moved."""
+    views = json.loads(cdp.eval("document.body.dataset.views || '[]'") or "[]")
+    x, y, w, h = views[0]
+    cx, cy = x + w / 2, y + h / 2
+
+    def mouse(kind, px, py, **extra):
+        cdp.call("Input.dispatchMouseEvent", type=kind, x=px, y=py, **extra)
+
+    def live():
+        return json.loads(cdp.eval("document.body.dataset.live || '{}'") or "{}")
+
+    # Focus: a click outside the views (the panel beside them), where no instrument acts.
+    mouse("mouseMoved", 5, y + h / 2)
+    mouse("mousePressed", 5, y + h / 2, button="left", buttons=1, clickCount=1)
+    mouse("mouseReleased", 5, y + h / 2, button="left", buttons=0, clickCount=1)
+    for kind in ("keyDown", "keyUp"):
+        cdp.call("Input.dispatchKeyEvent", type=kind, key="1", code="Digit1", windowsVirtualKeyCode=49,
+                 **({"text": "1"} if kind == "keyDown" else {}))
+    time.sleep(1)
+    before = live()
+    if before.get("instrument") != "Forceps":
+        raise RuntimeError(f"mouse: key 1 did not take the forceps: the page says {before}")
+    mouse("mouseMoved", cx, cy)
+    time.sleep(0.3)
+    mouse("mousePressed", cx, cy, button="left", buttons=1, clickCount=1)
+    for k in range(1, 31):
+        mouse("mouseMoved", cx, cy - 3 * k, button="left", buttons=1)
+        time.sleep(0.05)
+    time.sleep(1.5)
+    during = live()
+    cdp.screenshot(os.path.join(outdir, "mouse.png"))
+    mouse("mouseReleased", cx, cy - 90, button="left", buttons=0, clickCount=1)
+    moved = during.get("moved", 0) - before.get("moved", 0)
+    print(f"web: mouse: forceps dragged 90 px up from the trainee view's middle: grasped "
+          f"{during.get('grasped')}, {moved} element moves")
+    if not during.get("grasped") or moved <= 0:
+        raise RuntimeError(f"mouse: the forceps did not lift the tissue: before {before}, during {during}")
+
+
 def main():
     url, outdir, native_metrics, broken, native_check = sys.argv[1:6]
     os.makedirs(outdir, exist_ok=True)
@@ -214,7 +259,11 @@ def main():
         if first > FIRST_FRAME_BUDGET_MS:
             raise RuntimeError(f"first frame after {first:.0f} ms, over the {FIRST_FRAME_BUDGET_MS} ms budget")
 
-        # 2. The careful dissection played from the URL, against the native run.
+        # 2. The instruments by hand: the mouse selects the forceps (key 1), grasps the tissue in the
+        # middle of the trainee's view and drags it up; the tissue moves with it.
+        check_mouse(cdp, outdir)
+
+        # 3. The careful dissection played from the URL, against the native run.
         cdp.call("Page.navigate", url=url + "?scene=meninges&script=meninges_careful")
         cdp.wait_for("document.body && document.body.dataset.done", 300, "the script to finish")
         result = cdp.eval("document.getElementById('result').textContent")
@@ -231,7 +280,7 @@ def main():
         if web["links_cut"] != native["links_cut"] or abs(ws - ns) > 0.1:
             raise RuntimeError("the browser's run differs from the native run")
 
-        # 3. A broken scene through the file picker.
+        # 4. A broken scene through the file picker.
         cdp.call("Page.navigate", url=url)
         cdp.wait_for("document.body && document.body.dataset.firstFrame", 60, "the first frame")
         doc = cdp.call("DOM.getDocument")

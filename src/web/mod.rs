@@ -316,6 +316,17 @@ impl WebApp {
             let metrics = self.session.metrics_json().unwrap_or_default();
             page::set_result(&metrics);
         }
+        if presented {
+            let world = self.session.world();
+            let d = world.tissue().damage();
+            page::set_live(&format!(
+                "{{\"instrument\":\"{:?}\",\"grasped\":{},\"moved\":{},\"links_cut\":{}}}",
+                world.instrument().kind,
+                world.instrument().grasped.is_some(),
+                world.elements_moved_total(),
+                d.layer_links_cut + d.connective_links_cut
+            ));
+        }
         if self.last_stats.elapsed().as_secs_f32() >= 1.0 {
             self.last_stats = Instant::now();
             let t = &self.session.timing;

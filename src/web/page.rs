@@ -104,6 +104,14 @@ pub fn set_views(rects: &[[f32; 4]]) {
     }
 }
 
+/// Publishes what the trainee's hand is doing (`<body data-live="{...}">`: the instrument, whether it
+/// holds tissue, elements moved and links cut so far), for the browser test that drives the mouse.
+pub fn set_live(json: &str) {
+    if let Some(body) = document().and_then(|d| d.body()) {
+        let _ = body.set_attribute("data-live", json);
+    }
+}
+
 /// Milliseconds since navigation.
 pub fn now_ms() -> f64 {
     web_sys::window().and_then(|w| w.performance()).map(|p| p.now()).unwrap_or(0.0)
