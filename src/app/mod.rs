@@ -443,6 +443,7 @@ fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action:
         Action::KeepSession => session.keep_session(),
         Action::ReplayPause(p) => session.set_paused(p),
         Action::ReplaySeek(step) => session.seek(step),
+        Action::ReplaySpeed(speed) => session.set_speed(speed),
         Action::ReplayFollowCamera(on) => {
             state.follow_camera = on;
             if !on {

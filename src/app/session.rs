@@ -416,13 +416,16 @@ impl Session {
         }
     }
 
-    /// Whether the simulation runs slower than real time: the thread gave up deadlines, or ran fewer
-    /// than 90 % of the scene's steps per second over its last full second.
+    /// Whether the simulation runs slower than real time (or than the replay's speed): the thread gave
+    /// up deadlines, or ran fewer than 90 % of the steps asked over its last full second.
     pub fn behind(&self) -> bool {
         let p = &self.published().pace;
         let warm = self.started.elapsed() > Duration::from_secs(2);
-        let running = !self.replay_finished() && !self.published().paused;
-        running && (p.behind || (warm && p.steps_per_second < 0.9 * p.rate_hz as f32))
+        let running =
+            !self.replay_finished() && !self.published().paused && self.published().seeking.is_none();
+        // No count yet (0) for a second after a new episode or speed.
+        let slow = warm && p.steps_per_second > 0.0 && p.steps_per_second < 0.9 * p.rate_hz as f32;
+        running && (p.behind || slow)
     }
 
     /// Whether a replay has played everything.
@@ -536,6 +539,8 @@ impl Session {
             last_step: *last_step,
             rate_hz: self.world().config().rate_hz as f32,
             paused: self.published().paused,
+            speed: self.published().speed as f32,
+            seeking: self.published().seeking,
             has_camera: !views.is_empty(),
             follow_camera,
         })
@@ -558,23 +563,30 @@ impl Session {
         }
     }
 
-    /// Replay: goes to step `target`: the recording is played again from the start up to it, here, as
-    /// fast as the machine goes (the simulation is deterministic, so the same steps give the same
-    /// tissue), and the thread takes it on from there.
+    /// Replay: plays on at `speed` times the scene's rate (0.5, 2, 4...; 1 is real time).
+    pub fn set_speed(&mut self, speed: f32) {
+        if matches!(self.driver, Driver::Replay { .. }) {
+            self.sim.send(Input::Speed(f64::from(speed)));
+        }
+    }
+
+    /// Replay: goes to step `target`. A step ahead is reached by stepping on; one behind by the
+    /// recording played again from the start (the simulation is deterministic, so the same steps give
+    /// the same tissue). Either way the simulation thread runs the steps as fast as the machine goes,
+    /// publishing as it goes, so the windows stay live and show the progress
+    /// ([`ReplayState::seeking`]); then it takes up the clock again (paused if it was).
     pub fn seek(&mut self, target: u64) {
         let Driver::Replay { actions, last_step, .. } = &self.driver else { return };
         let target = target.min(*last_step);
-        let player = Player::new(actions.clone());
-        let mut episode = match build(&self.scene, &self.scene_label, Source::Script(player)) {
-            Ok(e) => e,
-            Err(e) => return self.say(e.to_string()),
-        };
-        while episode.world().step_count() < target {
-            if episode.step().is_none() {
-                break;
-            }
+        if target < self.world().step_count() {
+            let player = Player::new(actions.clone());
+            let episode = match build(&self.scene, &self.scene_label, Source::Script(player)) {
+                Ok(e) => e,
+                Err(e) => return self.say(e.to_string()),
+            };
+            self.sim.send(Input::Replace(Box::new(episode)));
         }
-        self.sim.send(Input::Replace(Box::new(episode)));
+        self.sim.send(Input::FastForward(target));
         self.picker_step = None;
     }
 

@@ -73,6 +73,13 @@ pub enum Input {
     },
     /// Stops stepping (`true`) or goes on (`false`).
     Pause(bool),
+    /// Steps at this multiple of the world's rate from now on (a replay at 0.5×, 2×, 4×); 1 is real
+    /// time. Values are clamped to 1/16 to 64.
+    Speed(f64),
+    /// Steps as fast as the machine goes, without deadlines, until the world reaches this step (or its
+    /// script ends), publishing as it goes, then takes up the clock again: a replay's seek, after an
+    /// [`Input::Replace`] with the episode from its start. A pause holds only after it.
+    FastForward(u64),
 }
 
 /// What the thread says back.
@@ -88,7 +95,7 @@ pub enum Event {
 /// The pace the thread kept over the last full second (and, for the totals, since it started).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Pace {
-    /// The world's rate, steps per second.
+    /// The rate the thread steps at, steps per second: the world's rate times the speed.
     pub rate_hz: f64,
     /// Steps run in the last full second.
     pub steps_per_second: f32,
@@ -133,6 +140,10 @@ pub struct Published {
     pub finished: bool,
     /// Whether the thread is paused.
     pub paused: bool,
+    /// The multiple of the world's rate the thread steps at (1: real time).
+    pub speed: f64,
+    /// The step a fast-forward (a seek) is heading for, while it runs.
+    pub seeking: Option<u64>,
 }
 
 impl Published {
@@ -251,6 +262,7 @@ impl SimThread {
         let mut first = Published::default();
         first.fill(&episode);
         first.pace.rate_hz = episode.world().config().rate_hz;
+        first.speed = 1.0;
         let (publisher, output) = triple_buffer::triple_buffer(&first);
         let (input, inputs) = crossbeam_channel::unbounded();
         let (say, events) = crossbeam_channel::unbounded();
@@ -316,11 +328,20 @@ impl Drop for SimThread {
     }
 }
 
-/// Hands an input to the episode.
-fn take(episode: &mut Episode, input: Input, say: &Sender<Event>, paused: &mut bool, lag: &mut u64) {
+/// What the thread's loop keeps between inputs besides the episode.
+#[derive(Debug)]
+struct Control {
+    paused: bool,
+    lag: u64,
+    speed: f64,
+    fast_forward: Option<u64>,
+}
+
+/// Hands an input to the episode (or to the loop's control).
+fn take(episode: &mut Episode, input: Input, say: &Sender<Event>, control: &mut Control) {
     match input {
         Input::Give { seen, items } => {
-            *lag = episode.world().step_count().saturating_sub(seen);
+            control.lag = episode.world().step_count().saturating_sub(seen);
             for item in items {
                 match item {
                     Given::Command(c) => episode.push(c),
@@ -345,7 +366,9 @@ fn take(episode: &mut Episode, input: Input, say: &Sender<Event>, paused: &mut b
             let report = episode.assessor().map(|a| Box::new(a.report(episode.world(), &title, date)));
             let _ = say.send(Event::Report(report));
         }
-        Input::Pause(p) => *paused = p,
+        Input::Pause(p) => control.paused = p,
+        Input::Speed(x) => control.speed = if x.is_finite() { x.clamp(1.0 / 16.0, 64.0) } else { 1.0 },
+        Input::FastForward(step) => control.fast_forward = Some(step),
     }
 }
 
@@ -370,11 +393,11 @@ fn run(
     mut publisher: triple_buffer::Input<Published>,
 ) -> Episode {
     let rate_hz = episode.world().config().rate_hz;
+    let mut control = Control { paused: false, lag: 0, speed: 1.0, fast_forward: None };
+    let mut speed = control.speed;
     let mut period = Duration::from_secs_f64(1.0 / rate_hz);
     let mut meter = PaceMeter::new(period, rate_hz);
     let sleeper = spin_sleep::SpinSleeper::default();
-    let mut paused = false;
-    let mut lag = 0u64;
     let mut deadline = Instant::now();
     let mut last_publish: Option<Instant> = None;
     let mut dirty = true;
@@ -383,10 +406,11 @@ fn run(
             match inputs.try_recv() {
                 Ok(input) => {
                     let replace = matches!(input, Input::Replace(_));
-                    take(&mut episode, input, say, &mut paused, &mut lag);
-                    if replace {
-                        // A new world: its own rate, a fresh clock, a frame at once.
-                        let rate_hz = episode.world().config().rate_hz;
+                    take(&mut episode, input, say, &mut control);
+                    if replace || control.speed != speed {
+                        // A new world or a new speed: its own rate, a fresh clock, a frame at once.
+                        speed = control.speed;
+                        let rate_hz = episode.world().config().rate_hz * speed;
                         period = Duration::from_secs_f64(1.0 / rate_hz);
                         meter = PaceMeter::new(period, rate_hz);
                         deadline = Instant::now();
@@ -398,16 +422,42 @@ fn run(
                 Err(TryRecvError::Disconnected) => return episode,
             }
         }
-        if paused || episode.finished() {
+        if let Some(target) = control.fast_forward {
+            // A seek: no deadlines until the target, the frame refilled as it goes (its progress).
+            let arrived = episode.world().step_count() >= target || episode.finished();
+            if !arrived && episode.step().is_some() {
+                messages(&mut episode, say);
+                let now = Instant::now();
+                if last_publish.is_none_or(|t| now - t >= PUBLISH_EVERY) {
+                    publish(&mut publisher, &episode, &meter, &control);
+                    last_publish = Some(now);
+                }
+                continue;
+            }
+            control.fast_forward = None;
+            meter.idle();
+            deadline = Instant::now();
+            publish(&mut publisher, &episode, &meter, &control);
+            last_publish = Some(deadline);
+            dirty = false;
+        }
+        if control.paused || episode.finished() {
             // Idle: show the last state, then wait for input without spinning.
             if dirty {
-                publish(&mut publisher, &episode, &meter, paused, lag);
+                publish(&mut publisher, &episode, &meter, &control);
                 dirty = false;
             }
             meter.idle();
             match inputs.recv_timeout(IDLE_WAIT) {
                 Ok(input) => {
-                    take(&mut episode, input, say, &mut paused, &mut lag);
+                    let replace = matches!(input, Input::Replace(_));
+                    take(&mut episode, input, say, &mut control);
+                    if replace || control.speed != speed {
+                        speed = control.speed;
+                        let rate_hz = episode.world().config().rate_hz * speed;
+                        period = Duration::from_secs_f64(1.0 / rate_hz);
+                        meter = PaceMeter::new(period, rate_hz);
+                    }
                     dirty = true;
                 }
                 Err(RecvTimeoutError::Timeout) => {}
@@ -432,7 +482,7 @@ fn run(
         }
         let due = last_publish.is_none_or(|t| end - t >= PUBLISH_EVERY);
         if dirty && due {
-            publish(&mut publisher, &episode, &meter, paused, lag);
+            publish(&mut publisher, &episode, &meter, &control);
             last_publish = Some(end);
             dirty = false;
         }
@@ -443,14 +493,18 @@ fn publish(
     publisher: &mut triple_buffer::Input<Published>,
     episode: &Episode,
     meter: &PaceMeter,
-    paused: bool,
-    lag: u64,
+    control: &Control,
 ) {
     let frame = publisher.input_buffer_mut();
     frame.fill(episode);
-    frame.pace =
-        Pace { input_lag_steps: lag, total_p99_late_us: p99_us(meter.total_late.as_ref()), ..meter.done };
-    frame.paused = paused;
+    frame.pace = Pace {
+        input_lag_steps: control.lag,
+        total_p99_late_us: p99_us(meter.total_late.as_ref()),
+        ..meter.done
+    };
+    frame.paused = control.paused;
+    frame.speed = control.speed;
+    frame.seeking = control.fast_forward;
     publisher.publish();
 }
 
@@ -479,6 +533,34 @@ mod tests {
         let episode = episode.expect("the thread ended cleanly");
         assert!(episode.world().step_count() >= 50);
         assert_eq!(episode.world().instrument().target, [0.0, 0.02, 0.0]);
+    }
+
+    #[test]
+    fn a_slow_speed_steps_slower_and_a_fast_forward_reaches_its_step() {
+        let mut sim = SimThread::spawn(episode()).expect("thread");
+        sim.send(Input::Speed(0.25));
+        let t = Instant::now();
+        while sim.latest().speed != 0.25 {
+            assert!(t.elapsed() < Duration::from_secs(20), "the speed does not arrive");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let a = sim.latest().view.step_count();
+        std::thread::sleep(Duration::from_millis(400));
+        let b = sim.latest().view.step_count();
+        // 100 steps at a quarter of 1000 Hz (400 at full speed); a busy machine only makes fewer.
+        assert!(b - a < 200, "{} steps in 0.4 s at 0.25x", b - a);
+        // Paused, a fast-forward still goes to its step, and stops there.
+        sim.send(Input::Pause(true));
+        sim.send(Input::FastForward(b + 3000));
+        let t = Instant::now();
+        while sim.latest().view.step_count() < b + 3000 || sim.latest().seeking.is_some() {
+            assert!(t.elapsed() < Duration::from_secs(60), "the fast-forward does not arrive");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+        assert_eq!(sim.latest().view.step_count(), b + 3000, "paused after the fast-forward");
+        let (episode, _) = sim.stop();
+        assert_eq!(episode.map(|e| e.world().step_count()), Some(b + 3000));
     }
 
     #[test]

@@ -70,6 +70,8 @@ pub enum Action {
     ReplayPause(bool),
     /// Replay: go to this step (a step behind plays the recording again from the start, quickly).
     ReplaySeek(u64),
+    /// Replay: play at this multiple of real time.
+    ReplaySpeed(f32),
     /// Replay: show the trainee's view through the trainee's camera as recorded (true) or a free one.
     ReplayFollowCamera(bool),
 }
@@ -85,6 +87,10 @@ pub struct ReplayState {
     pub rate_hz: f32,
     /// Paused.
     pub paused: bool,
+    /// Playing at this multiple of real time.
+    pub speed: f32,
+    /// The step a seek is heading for, while the simulation thread runs up to it.
+    pub seeking: Option<u64>,
     /// The recording has the trainee's camera.
     pub has_camera: bool,
     /// The trainee's view follows the recorded camera.
@@ -274,11 +280,22 @@ fn replay_bar(ui: &mut egui::Ui, r: ReplayState, actions: &mut Vec<Action>) {
             }
         }
         ui.separator();
+        for speed in REPLAY_SPEEDS {
+            let label = if speed < 1.0 { format!("{speed}×") } else { format!("{speed:.0}×") };
+            if ui.selectable_label(r.speed == speed, label).clicked() && r.speed != speed {
+                actions.push(Action::ReplaySpeed(speed));
+            }
+        }
+        ui.separator();
         let last = r.last_step.max(1);
         let rate = r.rate_hz.max(1.0);
         let mut step = r.step.min(last);
-        let label = format!("{:.1} s of {:.1} s", step as f32 / rate, last as f32 / rate);
-        ui.spacing_mut().slider_width = (ui.available_width() - 190.0).max(80.0);
+        let label = match r.seeking {
+            // The thread runs the steps up to the target as fast as it goes; the bar shows how far.
+            Some(target) => format!("going to {:.1} s… {:.1} s", target as f32 / rate, step as f32 / rate),
+            None => format!("{:.1} s of {:.1} s", step as f32 / rate, last as f32 / rate),
+        };
+        ui.spacing_mut().slider_width = (ui.available_width() - 200.0).max(80.0);
         let slider = egui::Slider::new(&mut step, 0..=last).show_value(false).text(label);
         let response = ui.add(slider);
         if response.drag_stopped() || (response.changed() && !response.dragged()) {
@@ -286,6 +303,9 @@ fn replay_bar(ui: &mut egui::Ui, r: ReplayState, actions: &mut Vec<Action>) {
         }
     });
 }
+
+/// The replay speeds offered, multiples of real time.
+pub const REPLAY_SPEEDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 
 /// The observer window's panels: the monitor and the assessment on the right, status on top.
 #[derive(Default)]
@@ -308,17 +328,24 @@ impl ObserverUi {
         egui::Panel::top("observer-status").show(ui, |ui| status_bar(ui, frame, "observer"));
         egui::Panel::bottom("observer-monitor").resizable(true).default_size(330.0).show(ui, |ui| {
             ui.columns(2, |cols| {
-                egui::ScrollArea::vertical().id_salt("monitor").show(&mut cols[0], |ui| {
-                    ui.heading("Monitor");
-                    self.monitor.ui(ui, frame, actions);
+                // Columns lay out top-down *justified*, and egui then justifies wrapped text too (the
+                // words spread over the whole line, the text looking stretched): left-aligned instead.
+                let left = egui::Layout::top_down(egui::Align::Min);
+                cols[0].with_layout(left, |ui| {
+                    egui::ScrollArea::vertical().id_salt("monitor").show(ui, |ui| {
+                        ui.heading("Monitor");
+                        self.monitor.ui(ui, frame, actions);
+                    });
                 });
-                egui::ScrollArea::vertical().id_salt("assessment").show(&mut cols[1], |ui| {
-                    ui.heading("Exercise");
-                    self.exercise.ui(ui, frame, actions);
-                    ui.heading("Force");
-                    self.force.ui(ui, frame, actions);
-                    ui.heading("Assessment");
-                    self.assessment.ui(ui, frame, actions);
+                cols[1].with_layout(left, |ui| {
+                    egui::ScrollArea::vertical().id_salt("assessment").show(ui, |ui| {
+                        ui.heading("Exercise");
+                        self.exercise.ui(ui, frame, actions);
+                        ui.heading("Force");
+                        self.force.ui(ui, frame, actions);
+                        ui.heading("Assessment");
+                        self.assessment.ui(ui, frame, actions);
+                    });
                 });
             });
         });
