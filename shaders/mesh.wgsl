@@ -127,6 +127,26 @@ fn pow16(x: f32) -> f32 {
     return x8 * x8;
 }
 
+// Distance (surface fractions) from p to the segment a-b. Branch-free.
+fn segment_distance(p: vec2<f32>, a: vec2<f32>, b: vec2<f32>) -> f32 {
+    let ab = b - a;
+    let t = clamp(dot(p - a, ab) / max(dot(ab, ab), 1e-12), 0.0, 1.0);
+    return length(p - a - t * ab);
+}
+
+// Distance from uv to the planned incision (five segments through six points; see `Camera`).
+fn incision_distance(uv: vec2<f32>) -> f32 {
+    let p0 = camera.incision[0].xy;
+    let p1 = camera.incision[0].zw;
+    let p2 = camera.incision[1].xy;
+    let p3 = camera.incision[1].zw;
+    let p4 = camera.incision[2].xy;
+    let p5 = camera.incision[2].zw;
+    let a = min(segment_distance(uv, p0, p1), segment_distance(uv, p1, p2));
+    let b = min(segment_distance(uv, p2, p3), segment_distance(uv, p3, p4));
+    return min(min(a, b), segment_distance(uv, p4, p5));
+}
+
 @fragment
 fn fs_tissue(in: VsOut) -> @location(0) vec4<f32> {
     let v = normalize(camera.eye.xyz - in.world);
@@ -180,6 +200,12 @@ fn fs_tissue(in: VsOut) -> @location(0) vec4<f32> {
     lit = mix(lit, vec3<f32>(0.55, 0.05, 0.6), inside.y * (0.12 + 0.16 * stripe));
     lit = mix(lit, vec3<f32>(0.2, 0.95, 0.5), outline(in.region.x) * 0.85);
     lit = mix(lit, vec3<f32>(0.85, 0.2, 0.95), outline(in.region.y) * 0.85);
+    // The planned incision, dashed in a surgeon's violet marker on the upper layer (its outer side).
+    let cut_d = incision_distance(in.uv);
+    let cut_px = cut_d / max(fwidth(cut_d), 1e-9);
+    let dash = step(0.45, fract((in.uv.x + in.uv.y) * 45.0));
+    let marker = (1.0 - smoothstep(1.2, 2.4, cut_px)) * dash * object.params.w * select(1.0, 0.0, nv < 0.0);
+    lit = mix(lit, vec3<f32>(0.28, 0.12, 0.55), marker * 0.9);
     return output(lit, 1.0);
 }
 

@@ -33,6 +33,9 @@ pub struct Snapshot {
     pub clamped: Option<InstrumentPose>,
     /// Regions of the exercise to draw on the tissue's surface (from the scene's goals).
     pub regions: Vec<SurfaceRegion>,
+    /// The planned incision through the upper layer, a line through `(u, v)` points in surface
+    /// fractions (from the scene's goals), drawn on that layer as a surgeon's marker line.
+    pub incision: Vec<[f32; 2]>,
 }
 
 /// A connective fibre that no longer holds: its two ends (world space, metres; the lower layer's first)

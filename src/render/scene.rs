@@ -102,7 +102,14 @@ struct SceneUniform {
     casters: [[f32; 4]; 4],
     regions: [[f32; 4]; 4],
     region_kinds: [f32; 4],
+    /// The planned incision's first [`INCISION_POINTS`] points, two `(u, v)` per vector.
+    incision: [[f32; 4]; 3],
 }
+
+/// Points of the planned incision drawn (five segments; the U-shaped incisions have three).
+const INCISION_POINTS: usize = 6;
+/// Where unused incision points go (surface fractions): far off the surface, so they draw nothing.
+const NO_POINT: f32 = 100.0;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -856,6 +863,17 @@ impl SceneRenderer {
             scene.casters[2 * k] = a;
             scene.casters[2 * k + 1] = b;
         }
+        // The incision: unused points repeat the last one (zero-length segments) or, with no line,
+        // lie far off the surface.
+        let mut points = [[NO_POINT; 2]; INCISION_POINTS];
+        if self.style.show_regions && snapshot.incision.len() >= 2 {
+            for (k, p) in points.iter_mut().enumerate() {
+                *p = snapshot.incision[k.min(snapshot.incision.len() - 1)];
+            }
+        }
+        for (k, pair) in points.chunks_exact(2).enumerate() {
+            scene.incision[k] = [pair[0][0], pair[0][1], pair[1][0], pair[1][1]];
+        }
         if self.style.show_regions {
             for (k, region) in snapshot.regions.iter().take(4).enumerate() {
                 let forbidden = region.kind == RegionKind::Forbidden;
@@ -893,7 +911,8 @@ impl SceneRenderer {
                 ObjectUniform {
                     model: mat(Mat4::IDENTITY),
                     color: layer.color,
-                    params: [0.35, 0.0, pattern, 0.0],
+                    // w: 1 on the upper layer, which the planned incision is drawn on.
+                    params: [0.35, 0.0, pattern, if i == 0 { 1.0 } else { 0.0 }],
                     extra: [repeats[0], repeats[1], 0.0, 0.0],
                 },
             );

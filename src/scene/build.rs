@@ -63,6 +63,7 @@ impl Scene {
         let mut world = World::build(&self.tissue_spec()?, self.world_config(interactive))?;
         if let Some(goals) = &self.goals {
             world.set_regions(goals.surface_regions());
+            world.set_incision(goals.incision.iter().map(|&(u, v)| [u, v]).collect());
         }
         Ok(world)
     }

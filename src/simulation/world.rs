@@ -98,6 +98,8 @@ pub struct World {
     elements_moved_total: u64,
     /// The regions of the exercise, copied into every snapshot for drawing.
     regions: Vec<SurfaceRegion>,
+    /// The planned incision (surface fractions), copied into every snapshot for drawing.
+    incision: Vec<[f32; 2]>,
     /// Axis and roll of the forceps when another instrument was taken up while they held the tissue
     /// (they are drawn clamped where they were left).
     clamp_axis: ([f32; 3], f32),
@@ -123,6 +125,7 @@ impl World {
             last: StepCounters::default(),
             elements_moved_total: 0,
             regions: Vec::new(),
+            incision: Vec::new(),
             clamp_axis: ([0.0, 1.0, 0.0], 0.0),
             gauge: ForceGauge::default(),
             forces: Forces::default(),
@@ -231,6 +234,11 @@ impl World {
     /// Sets the regions drawn on the tissue (the exercise's target and forbidden areas).
     pub fn set_regions(&mut self, regions: Vec<SurfaceRegion>) {
         self.regions = regions;
+    }
+
+    /// Sets the planned incision drawn on the upper layer, `(u, v)` points in surface fractions.
+    pub fn set_incision(&mut self, points: Vec<[f32; 2]>) {
+        self.incision = points;
     }
 
     /// Queues a command for the next step (an instrument command or a world command).
@@ -453,6 +461,7 @@ impl World {
                 Some(InstrumentPose { kind: InstrumentKind::Forceps, tip, axis, roll, closed: true });
         }
         out.regions.clone_from(&self.regions);
+        out.incision.clone_from(&self.incision);
         out.cut_path.clear();
         if self.instrument.cutting {
             out.cut_path.extend_from_slice(&self.instrument.stroke);
