@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use dissect::chainmail::{ElementId, Material, RelaxBudget};
-use dissect::instrument::Command;
+use dissect::simulation::Command;
 use dissect::simulation::{InstrumentKind, World, WorldConfig};
 use dissect::surface::Surface;
 use dissect::tissue::{

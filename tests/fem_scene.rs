@@ -4,9 +4,9 @@
 
 use std::path::PathBuf;
 
-use dissect::instrument::Command;
 use dissect::runner;
 use dissect::scene::{Action, Point, Scene, Script};
+use dissect::simulation::Command;
 use dissect::simulation::InstrumentKind;
 use dissect::tissue::{CutDepth, FEM_CUT_REFUSED};
 

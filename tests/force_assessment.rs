@@ -2,9 +2,9 @@
 //! handles it with much less force than a careless one, and the figures reach `metrics.json`'s
 //! `assessment.force`.
 
-use dissect::instrument::Command;
 use dissect::runner::run;
 use dissect::scene::{Scene, Script};
+use dissect::simulation::Command;
 use dissect::simulation::{Forces, InstrumentKind};
 
 fn scene() -> Scene {

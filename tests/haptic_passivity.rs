@@ -3,8 +3,8 @@
 //! device that sends a NaN pose or disappears is dropped with a clear message while the world goes on.
 
 use dissect::haptics::{DeviceError, DeviceState, HapticLink, SimulatedDevice};
-use dissect::instrument::Command;
 use dissect::scene::Scene;
+use dissect::simulation::Command;
 use dissect::simulation::{InstrumentKind, World};
 
 const LIMIT: f32 = 3.0;

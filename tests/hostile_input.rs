@@ -226,7 +226,7 @@ fn class06_raw_commands_are_checked() {
     // The player never keeps a non-finite target, whatever reaches it (a script built in code).
     let mut world = one_layer.build_world(false).expect("world");
     let mut player = dissect::runner::Player::new(vec![
-        dissect::scene::Action::Command(dissect::instrument::Command::MoveTo([f32::NAN, 0.0, 0.0]).into()),
+        dissect::scene::Action::Command(dissect::simulation::Command::MoveTo([f32::NAN, 0.0, 0.0])),
         dissect::scene::Action::MoveTo { to: dissect::scene::Point::World(0.0, 0.01, 0.0), steps: 20 },
     ]);
     for _ in 0..25 {
@@ -246,7 +246,7 @@ fn class07_cut_recordings_read_to_their_last_complete_line() {
     let mut rec =
         dissect::scene::Recorder::create(&path, "scenes/meninges.ron", dissect::scene::DEFAULT_SCENE)
             .expect("recorder");
-    use dissect::instrument::Command as C;
+    use dissect::simulation::Command as C;
     let commands = [
         C::Select(dissect::simulation::InstrumentKind::Forceps),
         C::MoveTo([0.0, 0.01, 0.0]),
@@ -256,7 +256,7 @@ fn class07_cut_recordings_read_to_their_last_complete_line() {
         C::Release,
     ];
     for (i, c) in commands.iter().enumerate() {
-        rec.record(10 * i as u64, &c.clone().into()).expect("record");
+        rec.record(10 * i as u64, c).expect("record");
     }
     rec.finish(100).expect("finish");
     let full = std::fs::read_to_string(&path).expect("read");

@@ -9,10 +9,10 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use dissect::haptics::{DeviceState, HapticLink, SimulatedDevice};
-use dissect::instrument::{Command as InstrumentCommand, Hit};
+use dissect::instrument::Hit;
 use dissect::runner::{Episode, Event, Given, Input, Player, SimThread, Source, State};
 use dissect::scene::{Recorder, Recording, Scene};
-use dissect::simulation::InstrumentKind;
+use dissect::simulation::{Command, InstrumentKind};
 use dissect::training::Assessor;
 
 fn live_episode(scene: &Scene, record: &Path) -> Episode {
@@ -78,23 +78,20 @@ fn a_live_session_recorded_through_the_thread_replays_bit_for_bit() {
     let c = centre(&scene);
     let mut sim = SimThread::spawn(live_episode(&scene, &record)).expect("thread");
     let give = |sim: &SimThread, items: Vec<Given>| sim.give(items);
-    let cmd = |c: InstrumentCommand| Given::Command(c.into());
+    let cmd = |c: Command| Given::Command(c);
     // A grasp and a pull, given in small batches at irregular moments (a frame every 3 to 17 ms).
-    give(
-        &sim,
-        vec![cmd(InstrumentCommand::Select(InstrumentKind::Forceps)), cmd(InstrumentCommand::MoveTo(c))],
-    );
+    give(&sim, vec![cmd(Command::Select(InstrumentKind::Forceps)), cmd(Command::MoveTo(c))]);
     wait_for_step(&mut sim, 5);
     give(&sim, vec![Given::GraspAt(Hit { point: c, layer: 0, vertex: 0, distance: 0.0 })]);
     let mut seed = 12345u32;
     for k in 0..40 {
         let lift = 0.0002 * k as f32;
-        give(&sim, vec![cmd(InstrumentCommand::MoveTo([c[0] + lift * 0.3, c[1] + lift, c[2]]))]);
+        give(&sim, vec![cmd(Command::MoveTo([c[0] + lift * 0.3, c[1] + lift, c[2]]))]);
         seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
         std::thread::sleep(Duration::from_millis(3 + u64::from(seed >> 16) % 15));
         let _ = sim.latest();
     }
-    give(&sim, vec![cmd(InstrumentCommand::Release)]);
+    give(&sim, vec![cmd(Command::Release)]);
     let now = sim.latest().view.step_count();
     wait_for_step(&mut sim, now + 20);
     assert!(sim.latest().view.last_step().step > 0);
@@ -111,8 +108,8 @@ fn faulty_device(fault: &'static str) {
     let scene = Scene::default_scene().expect("default scene");
     let c = centre(&scene);
     let mut episode = live_episode(&scene, &record);
-    episode.push(InstrumentCommand::Select(InstrumentKind::Probe));
-    episode.push(InstrumentCommand::MoveTo([c[0], c[1] + 0.004, c[2]]));
+    episode.push(Command::Select(InstrumentKind::Probe));
+    episode.push(Command::MoveTo([c[0], c[1] + 0.004, c[2]]));
     let device = SimulatedDevice::new(3.0, move |step| {
         let y = -0.002 * (step.min(150) as f32 / 150.0);
         match (step >= 200, fault) {
@@ -145,7 +142,7 @@ fn faulty_device(fault: &'static str) {
     }
     // The mouse goes on: its moves reach the world and the recording.
     let target = [c[0] + 0.003, c[1] + 0.005, c[2]];
-    sim.send(Input::Give { seen: 0, items: vec![Given::Command(InstrumentCommand::MoveTo(target).into())] });
+    sim.send(Input::Give { seen: 0, items: vec![Given::Command(Command::MoveTo(target))] });
     let now = sim.latest().view.step_count();
     wait_for_step(&mut sim, now + 30);
     assert_eq!(sim.latest().view.instrument().target, target);

@@ -4,7 +4,7 @@
 mod common;
 
 use dissect::chainmail::{ElementId, LinkId, RelaxBudget};
-use dissect::instrument::Command;
+use dissect::simulation::Command;
 use dissect::simulation::{InstrumentKind, World, WorldConfig};
 use dissect::surface::Surface;
 use dissect::tissue::{Pinning, Tissue, TissueSpec};

@@ -6,7 +6,7 @@ mod common;
 
 use common::{GAP, WIDTH, plane};
 use dissect::chainmail::{ElementId, RelaxBudget};
-use dissect::instrument::Command;
+use dissect::simulation::Command;
 use dissect::simulation::{InstrumentKind, World, WorldConfig};
 use dissect::tissue::{CutDepth, CutSegment, LinkKind, Tissue};
 

@@ -4,8 +4,8 @@
 //! its constraint box, up to rounding.
 
 use dissect::chainmail::LinkId;
-use dissect::instrument::Command;
 use dissect::scene::{Scene, Tissue as SceneTissue};
+use dissect::simulation::Command;
 use dissect::simulation::{InstrumentKind, World};
 use dissect::tissue::CutDepth;
 use proptest::prelude::*;

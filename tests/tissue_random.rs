@@ -4,7 +4,7 @@
 mod common;
 
 use dissect::chainmail::RelaxBudget;
-use dissect::instrument::Command;
+use dissect::simulation::Command;
 use dissect::simulation::{InstrumentKind, World, WorldConfig};
 use dissect::tissue::CutDepth;
 use proptest::prelude::*;

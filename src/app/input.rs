@@ -5,9 +5,9 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::instrument::{Command, Hit, PROBE_RADIUS};
+use crate::instrument::{Hit, PROBE_RADIUS};
 use crate::render::OrbitCamera;
-use crate::simulation::{InstrumentKind, Snapshot, WorldView};
+use crate::simulation::{Command, InstrumentKind, Snapshot, WorldView};
 use crate::tissue::CutDepth;
 use crate::ui::ToolState;
 

@@ -22,9 +22,8 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, ModifiersState, NamedKey};
 use winit::window::{Window, WindowId};
 
-use crate::instrument::Command;
 use crate::render::{Gpu, OrbitCamera, SceneRenderer, Style, render_to_image, save_png};
-use crate::simulation::InstrumentKind;
+use crate::simulation::{Command, InstrumentKind};
 use crate::tissue::CutDepth;
 use crate::ui::{Action, Frame, ObserverUi, TraineeUi};
 use input::{CameraRig, Hand};

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant, SystemTime};
 
 use super::AppError;
 use crate::chainmail::{Material, MaterialId};
-use crate::instrument::{Command as InstrumentCommand, Picker};
+use crate::instrument::Picker;
 use crate::runner::{Episode, Event, Given, Input, Player, Published, SimThread, Source};
 use crate::scene::{Action as ScriptAction, DEFAULT_SCENE, DEFAULT_SCENE_PATH, Recorder, Recording, Scene};
 use crate::simulation::{CameraSpec, Command, InstrumentKind, Snapshot, WorldView};
@@ -332,17 +332,15 @@ impl Session {
 
     /// Gathers a command for the next step (ignored while replaying). Consecutive moves collapse into
     /// the last one; a move to where the last move went, with nothing else pending, is dropped.
-    pub fn queue(&mut self, command: impl Into<Command>) {
-        use InstrumentCommand::MoveTo;
-        let command = command.into();
+    pub fn queue(&mut self, command: Command) {
         if !self.input_enabled() {
             return;
         }
-        if let Command::Instrument(MoveTo(p)) = &command {
+        if let Command::MoveTo(p) = &command {
             if self.pending.is_empty() && self.last_target == Some(*p) {
                 return;
             }
-            if let Some(Given::Command(Command::Instrument(MoveTo(last)))) = self.pending.last_mut() {
+            if let Some(Given::Command(Command::MoveTo(last))) = self.pending.last_mut() {
                 *last = *p;
                 return;
             }
@@ -362,11 +360,8 @@ impl Session {
     /// the thread at the scene's rate whatever the frame rate.
     pub fn advance(&mut self, frame: Duration) {
         let t = Instant::now();
-        if let Some(Given::Command(Command::Instrument(InstrumentCommand::MoveTo(p)))) = self
-            .pending
-            .iter()
-            .rev()
-            .find(|g| matches!(g, Given::Command(Command::Instrument(InstrumentCommand::MoveTo(_)))))
+        if let Some(Given::Command(Command::MoveTo(p))) =
+            self.pending.iter().rev().find(|g| matches!(g, Given::Command(Command::MoveTo(_))))
         {
             self.last_target = Some(*p);
         }
@@ -772,12 +767,12 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("dissect-session-{}", std::process::id()));
         let rec = dir.join("r.ron");
         let mut live = Session::live(None, rec.clone()).expect("live session");
-        live.queue(InstrumentCommand::Select(InstrumentKind::Scalpel));
-        live.queue(InstrumentCommand::MoveTo([0.0, 0.01, 0.0]));
-        live.queue(InstrumentCommand::MoveTo([0.001, 0.01, 0.0]));
+        live.queue(Command::Select(InstrumentKind::Scalpel));
+        live.queue(Command::MoveTo([0.0, 0.01, 0.0]));
+        live.queue(Command::MoveTo([0.001, 0.01, 0.0]));
         live.advance(Duration::from_millis(5));
         std::thread::sleep(Duration::from_millis(30));
-        live.queue(InstrumentCommand::MoveTo([0.002, 0.01, 0.0]));
+        live.queue(Command::MoveTo([0.002, 0.01, 0.0]));
         live.advance(Duration::from_millis(30));
         std::thread::sleep(Duration::from_millis(30));
         live.advance(Duration::from_millis(30));
@@ -819,7 +814,7 @@ mod tests {
         // Nothing done yet: a reload goes ahead at once.
         assert!(live.request_reload());
         assert!(!live.reload_pending);
-        live.queue(InstrumentCommand::Select(InstrumentKind::Scalpel));
+        live.queue(Command::Select(InstrumentKind::Scalpel));
         live.advance(Duration::from_millis(5));
         until(&mut live, "the command is not recorded", |s| s.published().recorded > 0);
         // Work would be lost: the trainee is asked, and the session runs on.
@@ -844,11 +839,11 @@ mod tests {
         let mut live = Session::live(None, rec.clone()).expect("live session");
         let view = CameraSpec { eye: [0.0, 0.05, 0.05], target: [0.0; 3], fov_y_deg: 40.0 };
         live.note_view(view);
-        live.queue(InstrumentCommand::Select(InstrumentKind::Forceps));
-        live.queue(InstrumentCommand::MoveTo([0.0, 0.01, 0.0]));
+        live.queue(Command::Select(InstrumentKind::Forceps));
+        live.queue(Command::MoveTo([0.0, 0.01, 0.0]));
         live.advance(Duration::from_millis(5));
         std::thread::sleep(Duration::from_millis(30));
-        live.queue(InstrumentCommand::MoveTo([0.003, 0.008, 0.001]));
+        live.queue(Command::MoveTo([0.003, 0.008, 0.001]));
         live.advance(Duration::from_millis(5));
         std::thread::sleep(Duration::from_millis(30));
         live.advance(Duration::from_millis(5));

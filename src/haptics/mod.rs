@@ -24,8 +24,7 @@ pub use inverse3::Inverse3;
 
 use thiserror::Error;
 
-use crate::instrument::Command;
-use crate::simulation::InstrumentKind;
+use crate::simulation::{Command, InstrumentKind};
 
 /// What a device reports in one step.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

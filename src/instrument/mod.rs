@@ -1,6 +1,6 @@
 //! Instruments: the probe that pushes, the forceps that grasp and pull, the scalpel that cuts. Each
-//! holds a pose; the world turns instrument commands into what the instrument does to the tissue. Picking (a ray
-//! from the cursor against the current tissue triangles) uses parry3d.
+//! holds a pose; the world turns its commands (`simulation::Command`) into what the instrument does to
+//! the tissue. Picking (a ray from the cursor against the current tissue triangles) uses parry3d.
 //!
 //! Must not import wgpu, winit or egui.
 
@@ -108,31 +108,4 @@ impl Instrument {
             closed: self.grasped.is_some() && self.kind == InstrumentKind::Forceps,
         }
     }
-}
-
-/// What a user (or a script) does with the instrument. The world gathers them (as
-/// [`crate::simulation::Command::Instrument`], which also serializes them) and consumes them once, at
-/// the start of the next step.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Command {
-    /// Take another instrument (ends any cut; what the forceps hold stays held until `Release`).
-    Select(InstrumentKind),
-    /// Move the tip to a world point.
-    MoveTo([f32; 3]),
-    /// Forceps: close on the nearest element within reach of the tip.
-    Grasp,
-    /// Forceps: close on a given element (from picking).
-    GraspElement(ElementId),
-    /// Forceps: open.
-    Release,
-    /// Scalpel: set the depth of the blade.
-    SetDepth(CutDepth),
-    /// Scalpel: press the blade; moving the tip now cuts.
-    BeginCut,
-    /// Scalpel: lift the blade.
-    EndCut,
-    /// Rotate the instrument about its axis, radians.
-    Roll(f32),
-    /// Point the instrument: unit vector from the tip to the handle.
-    SetAxis([f32; 3]),
 }

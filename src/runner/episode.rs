@@ -165,9 +165,9 @@ impl Episode {
     }
 
     /// Gathers a live command for the next step (ignored while a script plays).
-    pub fn push(&mut self, command: impl Into<Command>) {
+    pub fn push(&mut self, command: Command) {
         if self.is_live() {
-            self.pending.push(command.into());
+            self.pending.push(command);
         }
     }
 

@@ -1,8 +1,7 @@
 //! The script player: timed actions in, one batch of instrument commands per step out.
 
-use crate::instrument::Command;
 use crate::scene::{Action, Point};
-use crate::simulation::Command as WorldCommand;
+use crate::simulation::Command;
 use crate::simulation::World;
 use crate::snapshot::InstrumentKind;
 
@@ -163,12 +162,10 @@ impl Player {
             Action::At(n) => self.wait_until = Some(n),
             Action::Command(c) => {
                 match &c {
-                    WorldCommand::Instrument(Command::Select(k)) => self.kind = Some(*k),
+                    Command::Select(k) => self.kind = Some(*k),
                     // The world ignores a point that is not finite; so does the player, which
                     // would otherwise start its next move from it.
-                    WorldCommand::Instrument(Command::MoveTo(p)) if p.iter().all(|x| x.is_finite()) => {
-                        self.tip = Some(*p)
-                    }
+                    Command::MoveTo(p) if p.iter().all(|x| x.is_finite()) => self.tip = Some(*p),
                     _ => {}
                 }
                 world.push(c)

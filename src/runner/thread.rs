@@ -22,7 +22,7 @@ use hdrhistogram::Histogram;
 
 use super::Episode;
 use crate::haptics::HapticLink;
-use crate::instrument::{Command as InstrumentCommand, Hit};
+use crate::instrument::Hit;
 use crate::simulation::{Command, WorldView};
 use crate::snapshot::Snapshot;
 use crate::training::{Assessment, Report};
@@ -347,7 +347,7 @@ fn take(episode: &mut Episode, input: Input, say: &Sender<Event>, control: &mut 
                     Given::Command(c) => episode.push(c),
                     Given::GraspAt(hit) => {
                         if let Some(e) = episode.world().element_at(&hit) {
-                            episode.push(InstrumentCommand::GraspElement(e));
+                            episode.push(Command::GraspElement(e));
                         }
                     }
                     Given::View(camera) => episode.record_view(&camera),
@@ -523,7 +523,7 @@ mod tests {
     #[test]
     fn the_thread_steps_on_its_own_and_publishes() {
         let mut sim = SimThread::spawn(episode()).expect("thread");
-        sim.give(vec![Given::Command(InstrumentCommand::MoveTo([0.0, 0.02, 0.0]).into())]);
+        sim.give(vec![Given::Command(Command::MoveTo([0.0, 0.02, 0.0]))]);
         let t = Instant::now();
         while sim.latest().view.step_count() < 50 {
             assert!(t.elapsed() < Duration::from_secs(20), "the thread does not step");

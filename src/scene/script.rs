@@ -209,8 +209,7 @@ impl Script {
 
     /// [`Script::check_against`], naming the action by its path under `list` (for line and column).
     pub(crate) fn against(&self, scene: &super::Scene, list: &FieldPath) -> Result<(), Problem> {
-        use crate::instrument::Command as C;
-        use crate::simulation::Command as W;
+        use crate::simulation::Command as C;
         let layers = match &scene.tissue {
             super::Tissue::Layers(l) => l.layers.len(),
             super::Tissue::Volume(_) => 1,
@@ -227,18 +226,16 @@ impl Script {
             let at = list.i(i).with_text(format!("action {} ({})", i + 1, name(a)));
             let fem = matches!(&scene.tissue, super::Tissue::Volume(v) if matches!(v.model, super::VolumeModel::Fem(_)));
             let select = match a {
-                Action::Select(k) | Action::Command(W::Instrument(C::Select(k))) => Some(*k),
+                Action::Select(k) | Action::Command(C::Select(k)) => Some(*k),
                 _ => None,
             };
             let depth = match a {
-                Action::Cut { depth, .. } | Action::Command(W::Instrument(C::SetDepth(depth))) => {
-                    Some(*depth)
-                }
+                Action::Cut { depth, .. } | Action::Command(C::SetDepth(depth)) => Some(*depth),
                 _ => None,
             };
             let element = match a {
                 Action::GraspElement(e)
-                | Action::Command(W::Instrument(C::GraspElement(crate::chainmail::ElementId(e)))) => Some(*e),
+                | Action::Command(C::GraspElement(crate::chainmail::ElementId(e))) => Some(*e),
                 _ => None,
             };
             if let Some(k) = select
@@ -274,7 +271,7 @@ impl Script {
                     ),
                 );
             }
-            if let Action::Command(W::SetMaterial(id, _)) = a
+            if let Action::Command(C::SetMaterial(id, _)) = a
                 && usize::from(id.0) >= materials
             {
                 return problem(
@@ -340,7 +337,7 @@ impl Script {
                 }
                 Action::Release | Action::GraspElement(_) => need(InstrumentKind::Forceps, held)?,
                 Action::Command(c) => {
-                    if let crate::simulation::Command::Instrument(crate::instrument::Command::Select(k)) = c {
+                    if let crate::simulation::Command::Select(k) = c {
                         held = Some(*k);
                     }
                     command(&at.inner(), c)?;
@@ -406,18 +403,14 @@ fn steps_at_least_1(at: &FieldPath, n: u32) -> Result<(), Problem> {
 /// A raw command holds to what the actions hold to: finite points within reach, a usable material, the
 /// sweep cap of scenes.
 fn command(at: &FieldPath, c: &crate::simulation::Command) -> Result<(), Problem> {
-    use crate::instrument::Command as C;
-    use crate::simulation::Command as W;
+    use crate::simulation::Command as C;
     let inner = at.inner();
-    let c = match c {
-        W::SetMaterial(_, m) => return super::validate::material(&at.i(1), m),
-        W::SetRelaxSweeps(n) if *n > 1000 => {
+    match c {
+        C::SetMaterial(_, m) => return super::validate::material(&at.i(1), m),
+        C::SetRelaxSweeps(n) if *n > 1000 => {
             return problem(&inner, format!("is {n}, expected at most 1000 sweeps per step"));
         }
-        W::SetRelaxSweeps(_) => return Ok(()),
-        W::Instrument(c) => c,
-    };
-    match c {
+        C::SetRelaxSweeps(_) => return Ok(()),
         C::MoveTo(p) => {
             for (k, &x) in p.iter().enumerate() {
                 within(&inner.i(k).with_text(format!("{}: {}", at.text(), ["x", "y", "z"][k])), x)?;

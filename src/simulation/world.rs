@@ -10,7 +10,7 @@ use web_time::Instant;
 use super::force::{ForceGauge, Forces};
 use super::{Command, FixedClock};
 use crate::chainmail::{ElementId, RelaxBudget};
-use crate::instrument::{Command as InstrumentCommand, GRASP_REACH, Hit, Instrument, InstrumentSizes};
+use crate::instrument::{GRASP_REACH, Hit, Instrument, InstrumentSizes};
 use crate::snapshot::{InstrumentKind, InstrumentPose, Snapshot, SurfaceRegion};
 use crate::tissue::{CutSegment, Tissue, TissueError, TissueSpec};
 
@@ -241,9 +241,9 @@ impl World {
         self.incision = points;
     }
 
-    /// Queues a command for the next step (an instrument command or a world command).
-    pub fn push(&mut self, command: impl Into<Command>) {
-        self.commands.push(command.into());
+    /// Queues a command for the next step.
+    pub fn push(&mut self, command: Command) {
+        self.commands.push(command);
     }
 
     /// The element under a picking hit (the hit's layer is the snapshot's, upper first): the element of
@@ -343,19 +343,12 @@ impl World {
 
     fn apply(&mut self, command: Command) {
         match command {
-            Command::Instrument(c) => self.apply_instrument(c),
             Command::SetMaterial(id, m) => {
                 if let Err(e) = self.tissue.body_mut().set_material(id, m) {
                     self.tissue.notice = Some(format!("material refused: {e}"));
                 }
             }
             Command::SetRelaxSweeps(n) => self.config.relax.max_sweeps = n,
-        }
-    }
-
-    fn apply_instrument(&mut self, command: InstrumentCommand) {
-        use InstrumentCommand as Command;
-        match command {
             Command::Select(kind) => {
                 // What the forceps hold stays clamped while another instrument is in use (two-handed
                 // teasing apart); taking the forceps back takes up the grasp where it is.

@@ -33,8 +33,8 @@ use winit::keyboard::{Key, ModifiersState, NamedKey};
 use winit::platform::web::{EventLoopExtWebSys, WindowAttributesExtWebSys};
 use winit::window::{Window, WindowId};
 
-use crate::instrument::Command;
 use crate::render::{Gpu, OrbitCamera, SceneRenderer, Style};
+use crate::simulation::Command;
 use crate::tissue::CutDepth;
 use crate::ui::{Action, Frame, TraineeUi};
 use input::{CameraRig, Hand};
@@ -362,12 +362,10 @@ impl WebApp {
             }
             Action::SetInsert(mm) if live => state.hand.tool.insert_mm = mm,
             Action::SetMaterial(id, m) if live && self.educator => match m.validate() {
-                Ok(()) => session.queue(crate::simulation::Command::SetMaterial(id, m)),
+                Ok(()) => session.queue(Command::SetMaterial(id, m)),
                 Err(e) => session.say(format!("material refused: {e}")),
             },
-            Action::SetSweeps(n) if live && self.educator => {
-                session.queue(crate::simulation::Command::SetRelaxSweeps(n))
-            }
+            Action::SetSweeps(n) if live && self.educator => session.queue(Command::SetRelaxSweeps(n)),
             Action::Reload if live => {
                 let (source, label) = (session.source.clone(), session.label.clone());
                 self.switch(&source, &label);

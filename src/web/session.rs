@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use web_time::Instant;
 
-use crate::instrument::{Command as InstrumentCommand, Picker};
+use crate::instrument::Picker;
 use crate::runner::{Episode, MetricsRecorder, Player, Source};
 use crate::scene::{Action as ScriptAction, Recording, Scene, Script};
 use crate::simulation::{Command, Snapshot, World, WorldView};
@@ -150,17 +150,14 @@ impl Session {
     }
 
     /// Gathers a command for the next step (consecutive moves collapse into the last).
-    pub fn queue(&mut self, command: impl Into<Command>) {
-        use InstrumentCommand::MoveTo;
-        let command = command.into();
+    pub fn queue(&mut self, command: Command) {
         if !self.input_enabled() {
             return;
         }
-        if self.episode.pending().is_empty() && command == MoveTo(self.world().instrument().target).into() {
+        if self.episode.pending().is_empty() && command == Command::MoveTo(self.world().instrument().target) {
             return;
         }
-        if let (Command::Instrument(MoveTo(p)), Some(Command::Instrument(MoveTo(last)))) =
-            (&command, self.episode.last_pending_mut())
+        if let (Command::MoveTo(p), Some(Command::MoveTo(last))) = (&command, self.episode.last_pending_mut())
         {
             *last = *p;
             return;
