@@ -204,36 +204,19 @@ pub(crate) fn draw_force<DB: plotters::prelude::DrawingBackend>(
     limit: f32,
     limit_colour: plotters::style::RGBColor,
 ) -> Result<(), String> {
-    use plotters::prelude::*;
-    let e = |e: &dyn std::fmt::Display| e.to_string();
+    use super::plot::{Layout, limit_and_line, mesh, time_chart};
     let t_max = history.last().map(|s| s.t).unwrap_or(1.0).max(0.01);
     let f_max = history.iter().map(|s| s.force_n).fold(limit, f32::max) * 1.1;
-    let mut chart = ChartBuilder::on(area)
-        .caption("Force on the instrument", ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(30)
-        .y_label_area_size(50)
-        .right_y_label_area_size(50)
-        .build_cartesian_2d(0f32..t_max, 0f32..f_max.max(1e-3))
-        .map_err(|x| e(&x))?;
-    chart
-        .configure_mesh()
-        .x_desc("time since the first instrument action (s)")
-        .y_desc("force (N)")
-        .label_style(("sans-serif", 14))
-        .draw()
-        .map_err(|x| e(&x))?;
-    chart
-        .draw_series(DashedLineSeries::new(
-            [(0.0, limit), (t_max, limit)],
-            8,
-            5,
-            limit_colour.stroke_width(2),
-        ))
-        .map_err(|x| e(&x))?;
-    chart
-        .draw_series(LineSeries::new(history.iter().map(|s| (s.t, s.force_n)), FORCE_COLOUR.stroke_width(2)))
-        .map_err(|x| e(&x))?;
+    let layout = Layout { caption: "Force on the instrument", caption_size: 18, x_label_area: 30 };
+    let mut chart = time_chart(area, &layout, t_max, 0f32..f_max.max(1e-3))?;
+    mesh(&mut chart, "force (N)")?;
+    limit_and_line(
+        &mut chart,
+        t_max,
+        (limit, limit_colour),
+        history.iter().map(|s| (s.t, s.force_n)),
+        FORCE_COLOUR,
+    )?;
     Ok(())
 }
 

@@ -7,6 +7,7 @@
 mod coach;
 mod force;
 mod goals;
+mod plot;
 mod report;
 
 pub use coach::{Advice, AdviceLevel};

@@ -151,22 +151,11 @@ pub fn write_plot(path: &Path, report: &Report) -> Result<(), ReportError> {
             "{}: score {:.0}, {verdict}; peak stretch {:.2} (limit {limit:.2})",
             report.title, a.score, a.peak_stretch
         );
-        let mut chart = ChartBuilder::on(&top)
-            .caption(caption, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(36)
-            .y_label_area_size(50)
-            .right_y_label_area_size(50)
-            .build_cartesian_2d(0f32..t_max, s_min..s_top)
+        let layout = super::plot::Layout { caption: &caption, caption_size: 20, x_label_area: 36 };
+        let mut chart = super::plot::time_chart(&top, &layout, t_max, s_min..s_top)
             .map_err(|e| fail(&e))?
             .set_secondary_coord(0f32..t_max, 0f32..100f32);
-        chart
-            .configure_mesh()
-            .x_desc("time since the first instrument action (s)")
-            .y_desc("peak stretch")
-            .label_style(("sans-serif", 14))
-            .draw()
-            .map_err(|e| fail(&e))?;
+        super::plot::mesh(&mut chart, "peak stretch").map_err(|e| fail(&e))?;
         chart
             .configure_secondary_axes()
             .y_desc("completion (%)")
@@ -179,20 +168,14 @@ pub fn write_plot(path: &Path, report: &Report) -> Result<(), ReportError> {
                 completion_colour.stroke_width(2),
             ))
             .map_err(|e| fail(&e))?;
-        chart
-            .draw_series(DashedLineSeries::new(
-                [(0.0, limit), (t_max, limit)],
-                8,
-                5,
-                limit_colour.stroke_width(2),
-            ))
-            .map_err(|e| fail(&e))?;
-        chart
-            .draw_series(LineSeries::new(
-                history.iter().map(|s| (s.t, s.stretch)),
-                stretch_colour.stroke_width(2),
-            ))
-            .map_err(|e| fail(&e))?;
+        super::plot::limit_and_line(
+            &mut chart,
+            t_max,
+            (limit, limit_colour),
+            history.iter().map(|s| (s.t, s.stretch)),
+            stretch_colour,
+        )
+        .map_err(|e| fail(&e))?;
         if let Some(peak) = history.iter().max_by(|x, y| x.stretch.total_cmp(&y.stretch)) {
             chart
                 .draw_series([Circle::new((peak.t, peak.stretch), 4, stretch_colour.filled())])
