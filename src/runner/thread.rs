@@ -385,6 +385,13 @@ fn messages(episode: &mut Episode, say: &Sender<Event>) {
     }
 }
 
+/// The step period and a fresh pace meter for the episode's rate at `speed` (a replay's 0.25× to 4×).
+fn pace(episode: &Episode, speed: f64) -> (Duration, PaceMeter) {
+    let rate_hz = episode.world().config().rate_hz * speed;
+    let period = Duration::from_secs_f64(1.0 / rate_hz);
+    (period, PaceMeter::new(period, rate_hz))
+}
+
 /// The thread's loop: inputs, wait for the deadline, step, publish now and then.
 fn run(
     mut episode: Episode,
@@ -392,11 +399,9 @@ fn run(
     say: &Sender<Event>,
     mut publisher: triple_buffer::Input<Published>,
 ) -> Episode {
-    let rate_hz = episode.world().config().rate_hz;
     let mut control = Control { paused: false, lag: 0, speed: 1.0, fast_forward: None };
     let mut speed = control.speed;
-    let mut period = Duration::from_secs_f64(1.0 / rate_hz);
-    let mut meter = PaceMeter::new(period, rate_hz);
+    let (mut period, mut meter) = pace(&episode, speed);
     let sleeper = spin_sleep::SpinSleeper::default();
     let mut deadline = Instant::now();
     let mut last_publish: Option<Instant> = None;
@@ -410,9 +415,7 @@ fn run(
                     if replace || control.speed != speed {
                         // A new world or a new speed: its own rate, a fresh clock, a frame at once.
                         speed = control.speed;
-                        let rate_hz = episode.world().config().rate_hz * speed;
-                        period = Duration::from_secs_f64(1.0 / rate_hz);
-                        meter = PaceMeter::new(period, rate_hz);
+                        (period, meter) = pace(&episode, speed);
                         deadline = Instant::now();
                         last_publish = None;
                     }
@@ -454,9 +457,7 @@ fn run(
                     take(&mut episode, input, say, &mut control);
                     if replace || control.speed != speed {
                         speed = control.speed;
-                        let rate_hz = episode.world().config().rate_hz * speed;
-                        period = Duration::from_secs_f64(1.0 / rate_hz);
-                        meter = PaceMeter::new(period, rate_hz);
+                        (period, meter) = pace(&episode, speed);
                     }
                     dirty = true;
                 }
