@@ -6,6 +6,7 @@
 //! `training` and `instrument`, and reaches the engine only through [`World`](crate::simulation::World)'s
 //! public API and the snapshot.
 
+mod events;
 mod input;
 mod session;
 mod window;
@@ -17,14 +18,13 @@ use std::time::Instant;
 use glam::Vec2;
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
-use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event::{ElementState, MouseButton, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, ModifiersState, NamedKey};
 use winit::window::{Window, WindowId};
 
 use crate::render::{Gpu, OrbitCamera, SceneRenderer, Style, render_to_image, save_png};
 use crate::simulation::{Command, InstrumentKind};
-use crate::tissue::CutDepth;
 use crate::ui::{Action, Frame, ObserverUi, TraineeUi};
 use input::{CameraRig, Hand};
 use session::Session;
@@ -318,11 +318,11 @@ impl App {
             let output = win.egui_ctx.clone().run_ui(raw, |ui| {
                 area = ui_state.show(ui, &frame, single, &mut actions);
                 let (left, right) = split(area, single);
-                caption(ui, left, if replaying { "trainee · replay" } else { "trainee" });
+                events::caption(ui, left, if replaying { "trainee · replay" } else { "trainee" });
                 if let (Some(right), Some(id)) = (right, second) {
                     let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
                     ui.painter().image(id, right, uv, egui::Color32::WHITE);
-                    caption(ui, right, "observer");
+                    events::caption(ui, right, "observer");
                 }
             });
             win.set_area(area);
@@ -334,7 +334,7 @@ impl App {
             let ui_state = &mut state.observer_ui;
             let output = win.egui_ctx.clone().run_ui(raw, |ui| {
                 area = ui_state.show(ui, &frame, &mut actions);
-                caption(ui, area, "observer");
+                events::caption(ui, area, "observer");
             });
             win.set_area(area);
             win.draw(&state.gpu, &state.renderer, output)?;
@@ -372,19 +372,6 @@ fn split(area: egui::Rect, single: bool) -> (egui::Rect, Option<egui::Rect>) {
         egui::Rect::from_min_max(area.min, egui::pos2(mid, area.max.y)),
         Some(egui::Rect::from_min_max(egui::pos2(mid, area.min.y), area.max)),
     )
-}
-
-/// A small label in a view's top-left corner.
-fn caption(ui: &egui::Ui, rect: egui::Rect, text: &str) {
-    if rect.is_positive() {
-        ui.painter().text(
-            rect.min + egui::vec2(8.0, 6.0),
-            egui::Align2::LEFT_TOP,
-            text,
-            egui::FontId::proportional(14.0),
-            egui::Color32::from_white_alpha(170),
-        );
-    }
 }
 
 /// Feeds the cursor to the hand: a press (`press`) or a drag/hover in the trainee's view.
@@ -527,25 +514,11 @@ fn screenshot(state: &mut State, session: &mut Session, options: &AppOptions) {
 /// The action a key asks for, if any.
 fn key_action(key: &Key, instruments: &[InstrumentKind]) -> Option<Action> {
     match key {
-        Key::Named(NamedKey::F1) => Some(Action::ToggleHelp),
         Key::Named(NamedKey::F5) => Some(Action::Reload),
         Key::Named(NamedKey::F12) => Some(Action::Screenshot),
-        Key::Named(NamedKey::Home) => Some(Action::ResetCameras),
-        Key::Character(s) => match s.as_str() {
-            "?" => Some(Action::ToggleHelp),
-            "p" | "P" => Some(Action::Screenshot),
-            "r" | "R" => Some(Action::Report),
-            "g" | "G" => Some(Action::ToggleRegions),
-            "u" | "U" => Some(Action::SetDepth(CutDepth::Upper)),
-            "b" | "B" => Some(Action::SetDepth(CutDepth::Between)),
-            "l" | "L" => Some(Action::SetDepth(CutDepth::Lower)),
-            "1" | "2" | "3" => {
-                let i = s.parse::<usize>().ok()?.checked_sub(1)?;
-                instruments.get(i).copied().map(Action::Select)
-            }
-            _ => None,
-        },
-        _ => None,
+        Key::Character(s) if matches!(s.as_str(), "p" | "P") => Some(Action::Screenshot),
+        Key::Character(s) if matches!(s.as_str(), "g" | "G") => Some(Action::ToggleRegions),
+        _ => events::key_action(key, instruments),
     }
 }
 
@@ -593,20 +566,7 @@ impl ApplicationHandler for App {
             WindowEvent::ModifiersChanged(m) => state.modifiers = m.state(),
             WindowEvent::CursorMoved { position, .. } => {
                 let cursor = Vec2::new(position.x as f32, position.y as f32);
-                let delta = cursor - win.cursor;
-                win.cursor = cursor;
-                win.pointer.pos = cursor - Vec2::new(win.rect[0], win.rect[1]);
-                win.second_pointer.pos = cursor - Vec2::new(win.second_rect[0], win.second_rect[1]);
-                let shift = state.modifiers.shift_key();
-                let (pointer, rig) = if win.drag_view == 1 {
-                    (win.second_pointer, win.second_camera.as_mut())
-                } else {
-                    (win.pointer, Some(&mut win.camera))
-                };
-                let camera_drag = pointer.right || pointer.middle;
-                if let Some(rig) = rig.filter(|_| camera_drag) {
-                    input::drag_camera(rig, &pointer, shift, delta);
-                }
+                let camera_drag = events::cursor_moved(win, cursor, state.modifiers.shift_key());
                 // The trainee's view: the instrument follows the cursor (a stroke, or hovering).
                 if is_trainee
                     && live
@@ -619,19 +579,8 @@ impl ApplicationHandler for App {
             }
             WindowEvent::MouseInput { state: button_state, button, .. } => {
                 let pressed = button_state == ElementState::Pressed;
-                if pressed {
-                    if consumed {
-                        return;
-                    }
-                    let Some(view) = win.view_at(win.cursor) else { return };
-                    win.drag_view = view;
-                }
-                let pointer = if win.drag_view == 1 { &mut win.second_pointer } else { &mut win.pointer };
-                match button {
-                    MouseButton::Left => pointer.left = pressed,
-                    MouseButton::Right => pointer.right = pressed,
-                    MouseButton::Middle => pointer.middle = pressed,
-                    _ => {}
+                if !events::button(win, button, pressed, consumed) {
+                    return;
                 }
                 if button == MouseButton::Left && is_trainee && live {
                     if pressed && win.drag_view == 0 {
@@ -647,22 +596,11 @@ impl ApplicationHandler for App {
                 if consumed {
                     return;
                 }
-                let notches = match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y,
-                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
-                };
+                let notches = events::notches(delta);
                 if is_trainee && live && state.hand.busy() && state.hand.wheel(notches) {
                     return;
                 }
-                match win.view_at(win.cursor) {
-                    Some(1) => {
-                        if let Some(rig) = win.second_camera.as_mut() {
-                            input::zoom_camera(rig, notches);
-                        }
-                    }
-                    Some(_) => input::zoom_camera(&mut win.camera, notches),
-                    None => {}
-                }
+                events::zoom(win, notches);
             }
             WindowEvent::KeyboardInput { event, .. } => {
                 if consumed || event.state != ElementState::Pressed {
@@ -680,15 +618,8 @@ impl ApplicationHandler for App {
                     state.trainee_ui.report.open = false;
                     return;
                 }
-                let roll = match &event.logical_key {
-                    Key::Character(s) if s == "[" => Some(-15.0),
-                    Key::Character(s) if s == "]" => Some(15.0),
-                    _ => None,
-                };
-                let action = match roll {
-                    Some(d) => Some(Action::SetRoll(
-                        (state.hand.tool.roll_deg + d + 180.0).rem_euclid(360.0) - 180.0,
-                    )),
+                let action = match events::roll(&event.logical_key, state.hand.tool.roll_deg) {
+                    Some(roll) => Some(roll),
                     None if event.repeat => None,
                     None => key_action(&event.logical_key, &session.scene.instruments),
                 };
@@ -716,6 +647,7 @@ impl ApplicationHandler for App {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tissue::CutDepth;
 
     #[test]
     fn keys_map_to_the_actions_the_help_lists() {
@@ -727,6 +659,14 @@ mod tests {
         assert_eq!(key_action(&key("?"), &instruments), Some(Action::ToggleHelp));
         assert_eq!(key_action(&Key::Named(NamedKey::F12), &instruments), Some(Action::Screenshot));
         assert_eq!(key_action(&Key::Named(NamedKey::F5), &instruments), Some(Action::Reload));
+        assert_eq!(key_action(&key("G"), &instruments), Some(Action::ToggleRegions));
+        assert_eq!(key_action(&key("p"), &instruments), Some(Action::Screenshot));
+        // The keys the browser shares: the desktop's own ones are not among them.
+        assert_eq!(events::key_action(&key("g"), &instruments), None);
+        assert_eq!(events::key_action(&key("r"), &instruments), Some(Action::Report));
+        assert_eq!(events::roll(&key("]"), 170.0), Some(Action::SetRoll(-175.0)));
+        assert_eq!(events::roll(&key("["), 0.0), Some(Action::SetRoll(-15.0)));
+        assert_eq!(events::roll(&key("x"), 0.0), None);
     }
 
     #[test]

@@ -8,9 +8,12 @@
 //! bundled script as `dissect run` does and writes its figures into `<pre id="result">`. The session's
 //! recording and report download from the page.
 //!
-//! The window glue and the pure input logic are the desktop app's own files (`app/window.rs`,
-//! `app/input.rs`), compiled here too; the event translation is this module's.
+//! The window glue, the pure input logic and the window events both translate alike are the desktop
+//! app's own files (`app/window.rs`, `app/input.rs`, `app/events.rs`), compiled here too; what the
+//! events do to the page's session is this module's.
 
+#[path = "../app/events.rs"]
+mod events;
 #[path = "../app/input.rs"]
 mod input;
 mod page;
@@ -27,7 +30,7 @@ use std::sync::Arc;
 use glam::Vec2;
 use web_time::Instant;
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event::{ElementState, MouseButton, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, ModifiersState, NamedKey};
 use winit::platform::web::{EventLoopExtWebSys, WindowAttributesExtWebSys};
@@ -35,7 +38,6 @@ use winit::window::{Window, WindowId};
 
 use crate::render::{Gpu, OrbitCamera, SceneRenderer, Style};
 use crate::simulation::Command;
-use crate::tissue::CutDepth;
 use crate::ui::{Action, Frame, TraineeUi};
 use input::{CameraRig, Hand};
 use page::{Params, Request, Requests};
@@ -292,11 +294,11 @@ impl WebApp {
             let mid = area.center().x;
             let left = egui::Rect::from_min_max(area.min, egui::pos2(mid, area.max.y));
             let right = egui::Rect::from_min_max(egui::pos2(mid, area.min.y), area.max);
-            caption(ui, left, if replaying { "trainee · script" } else { "trainee" });
+            events::caption(ui, left, if replaying { "trainee · script" } else { "trainee" });
             if let Some(id) = second {
                 let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
                 ui.painter().image(id, right, uv, egui::Color32::WHITE);
-                caption(ui, right, "observer");
+                events::caption(ui, right, "observer");
             }
         });
         win.set_area(area);
@@ -391,19 +393,6 @@ impl WebApp {
     }
 }
 
-/// A small label in a view's top-left corner.
-fn caption(ui: &egui::Ui, rect: egui::Rect, text: &str) {
-    if rect.is_positive() {
-        ui.painter().text(
-            rect.min + egui::vec2(8.0, 6.0),
-            egui::Align2::LEFT_TOP,
-            text,
-            egui::FontId::proportional(14.0),
-            egui::Color32::from_white_alpha(170),
-        );
-    }
-}
-
 fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let camera = state.win.camera.camera;
     let pointer = state.win.pointer;
@@ -422,26 +411,6 @@ fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     }
     for c in out {
         session.queue(c);
-    }
-}
-
-fn key_action(key: &Key, instruments: &[crate::simulation::InstrumentKind]) -> Option<Action> {
-    match key {
-        Key::Named(NamedKey::F1) => Some(Action::ToggleHelp),
-        Key::Named(NamedKey::Home) => Some(Action::ResetCameras),
-        Key::Character(s) => match s.as_str() {
-            "?" => Some(Action::ToggleHelp),
-            "r" | "R" => Some(Action::Report),
-            "u" | "U" => Some(Action::SetDepth(CutDepth::Upper)),
-            "b" | "B" => Some(Action::SetDepth(CutDepth::Between)),
-            "l" | "L" => Some(Action::SetDepth(CutDepth::Lower)),
-            "1" | "2" | "3" => {
-                let i = s.parse::<usize>().ok()?.checked_sub(1)?;
-                instruments.get(i).copied().map(Action::Select)
-            }
-            _ => None,
-        },
-        _ => None,
     }
 }
 
@@ -521,20 +490,7 @@ impl ApplicationHandler for WebApp {
             WindowEvent::ModifiersChanged(m) => state.modifiers = m.state(),
             WindowEvent::CursorMoved { position, .. } => {
                 let cursor = Vec2::new(position.x as f32, position.y as f32);
-                let delta = cursor - win.cursor;
-                win.cursor = cursor;
-                win.pointer.pos = cursor - Vec2::new(win.rect[0], win.rect[1]);
-                win.second_pointer.pos = cursor - Vec2::new(win.second_rect[0], win.second_rect[1]);
-                let shift = state.modifiers.shift_key();
-                let (pointer, rig) = if win.drag_view == 1 {
-                    (win.second_pointer, win.second_camera.as_mut())
-                } else {
-                    (win.pointer, Some(&mut win.camera))
-                };
-                let camera_drag = pointer.right || pointer.middle;
-                if let Some(rig) = rig.filter(|_| camera_drag) {
-                    input::drag_camera(rig, &pointer, shift, delta);
-                }
+                let camera_drag = events::cursor_moved(win, cursor, state.modifiers.shift_key());
                 if live && !camera_drag && (state.hand.busy() || win.view_at(cursor) == Some(0)) && !consumed
                 {
                     drive_hand(state, session, false);
@@ -542,19 +498,8 @@ impl ApplicationHandler for WebApp {
             }
             WindowEvent::MouseInput { state: button_state, button, .. } => {
                 let pressed = button_state == ElementState::Pressed;
-                if pressed {
-                    if consumed {
-                        return;
-                    }
-                    let Some(view) = win.view_at(win.cursor) else { return };
-                    win.drag_view = view;
-                }
-                let pointer = if win.drag_view == 1 { &mut win.second_pointer } else { &mut win.pointer };
-                match button {
-                    MouseButton::Left => pointer.left = pressed,
-                    MouseButton::Right => pointer.right = pressed,
-                    MouseButton::Middle => pointer.middle = pressed,
-                    _ => {}
+                if !events::button(win, button, pressed, consumed) {
+                    return;
                 }
                 if button == MouseButton::Left && live {
                     if pressed && win.drag_view == 0 {
@@ -572,22 +517,11 @@ impl ApplicationHandler for WebApp {
                 if consumed {
                     return;
                 }
-                let notches = match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y,
-                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
-                };
+                let notches = events::notches(delta);
                 if live && state.hand.busy() && state.hand.wheel(notches) {
                     return;
                 }
-                match win.view_at(win.cursor) {
-                    Some(1) => {
-                        if let Some(rig) = win.second_camera.as_mut() {
-                            input::zoom_camera(rig, notches);
-                        }
-                    }
-                    Some(_) => input::zoom_camera(&mut win.camera, notches),
-                    None => {}
-                }
+                events::zoom(win, notches);
             }
             WindowEvent::KeyboardInput { event, .. } => {
                 if consumed || event.state != ElementState::Pressed || event.repeat {
@@ -598,17 +532,8 @@ impl ApplicationHandler for WebApp {
                     state.ui.report.open = false;
                     return;
                 }
-                let roll = match &event.logical_key {
-                    Key::Character(s) if s == "[" => Some(-15.0),
-                    Key::Character(s) if s == "]" => Some(15.0),
-                    _ => None,
-                };
-                let action = match roll {
-                    Some(d) => Some(Action::SetRoll(
-                        (state.hand.tool.roll_deg + d + 180.0).rem_euclid(360.0) - 180.0,
-                    )),
-                    None => key_action(&event.logical_key, &session.scene.instruments),
-                };
+                let action = events::roll(&event.logical_key, state.hand.tool.roll_deg)
+                    .or_else(|| events::key_action(&event.logical_key, &session.scene.instruments));
                 if let Some(a) = action {
                     self.apply(a);
                 }

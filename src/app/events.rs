@@ -1,0 +1,119 @@
+//! Window events both front ends translate alike, the desktop's windows and the browser's canvas
+//! (`web` compiles this file too, as it does `input.rs` and `window.rs`): the cursor and the buttons
+//! on a window's views, the wheel's zoom, the keys both offer, the views' captions. What follows from
+//! them for the hand and the session stays with each front end.
+
+use glam::Vec2;
+use winit::event::{MouseButton, MouseScrollDelta};
+use winit::keyboard::{Key, NamedKey};
+
+use super::input;
+use super::window::ViewWindow;
+use crate::simulation::InstrumentKind;
+use crate::tissue::CutDepth;
+use crate::ui::Action;
+
+/// The cursor moved to `cursor` (window pixels): both views' pointers follow it, and a right or
+/// middle drag turns or pans the camera of the view it started in (`shift` pans). Returns whether
+/// such a camera drag is on (the hand then leaves the cursor alone).
+pub(crate) fn cursor_moved(win: &mut ViewWindow, cursor: Vec2, shift: bool) -> bool {
+    let delta = cursor - win.cursor;
+    win.cursor = cursor;
+    win.pointer.pos = cursor - Vec2::new(win.rect[0], win.rect[1]);
+    win.second_pointer.pos = cursor - Vec2::new(win.second_rect[0], win.second_rect[1]);
+    let (pointer, rig) = if win.drag_view == 1 {
+        (win.second_pointer, win.second_camera.as_mut())
+    } else {
+        (win.pointer, Some(&mut win.camera))
+    };
+    let camera_drag = pointer.right || pointer.middle;
+    if let Some(rig) = rig.filter(|_| camera_drag) {
+        input::drag_camera(rig, &pointer, shift, delta);
+    }
+    camera_drag
+}
+
+/// A mouse button went down or up: a press outside the views, or one the panels took (`consumed`),
+/// is ignored (returns false); otherwise the pointer of the view the drag started in records it.
+pub(crate) fn button(win: &mut ViewWindow, button: MouseButton, pressed: bool, consumed: bool) -> bool {
+    if pressed {
+        if consumed {
+            return false;
+        }
+        let Some(view) = win.view_at(win.cursor) else { return false };
+        win.drag_view = view;
+    }
+    let pointer = if win.drag_view == 1 { &mut win.second_pointer } else { &mut win.pointer };
+    match button {
+        MouseButton::Left => pointer.left = pressed,
+        MouseButton::Right => pointer.right = pressed,
+        MouseButton::Middle => pointer.middle = pressed,
+        _ => {}
+    }
+    true
+}
+
+/// Wheel notches of a scroll (a pixel scroll counts 40 pixels a notch).
+pub(crate) fn notches(delta: MouseScrollDelta) -> f32 {
+    match delta {
+        MouseScrollDelta::LineDelta(_, y) => y,
+        MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+    }
+}
+
+/// Zooms the camera of the view under the cursor by `notches`.
+pub(crate) fn zoom(win: &mut ViewWindow, notches: f32) {
+    match win.view_at(win.cursor) {
+        Some(1) => {
+            if let Some(rig) = win.second_camera.as_mut() {
+                input::zoom_camera(rig, notches);
+            }
+        }
+        Some(_) => input::zoom_camera(&mut win.camera, notches),
+        None => {}
+    }
+}
+
+/// The roll `[` and `]` ask for from `roll_deg`, degrees in `[-180, 180)`.
+pub(crate) fn roll(key: &Key, roll_deg: f32) -> Option<Action> {
+    let d = match key {
+        Key::Character(s) if s == "[" => -15.0,
+        Key::Character(s) if s == "]" => 15.0,
+        _ => return None,
+    };
+    Some(Action::SetRoll((roll_deg + d + 180.0).rem_euclid(360.0) - 180.0))
+}
+
+/// The keys both front ends offer: help, cameras, the report, the cutting depth, the instruments.
+pub(crate) fn key_action(key: &Key, instruments: &[InstrumentKind]) -> Option<Action> {
+    match key {
+        Key::Named(NamedKey::F1) => Some(Action::ToggleHelp),
+        Key::Named(NamedKey::Home) => Some(Action::ResetCameras),
+        Key::Character(s) => match s.as_str() {
+            "?" => Some(Action::ToggleHelp),
+            "r" | "R" => Some(Action::Report),
+            "u" | "U" => Some(Action::SetDepth(CutDepth::Upper)),
+            "b" | "B" => Some(Action::SetDepth(CutDepth::Between)),
+            "l" | "L" => Some(Action::SetDepth(CutDepth::Lower)),
+            "1" | "2" | "3" => {
+                let i = s.parse::<usize>().ok()?.checked_sub(1)?;
+                instruments.get(i).copied().map(Action::Select)
+            }
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// A view's caption in its top-left corner.
+pub(crate) fn caption(ui: &egui::Ui, rect: egui::Rect, text: &str) {
+    if rect.is_positive() {
+        ui.painter().text(
+            rect.min + egui::vec2(8.0, 6.0),
+            egui::Align2::LEFT_TOP,
+            text,
+            egui::FontId::proportional(14.0),
+            egui::Color32::from_white_alpha(170),
+        );
+    }
+}
