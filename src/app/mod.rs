@@ -612,6 +612,14 @@ impl ApplicationHandler for App {
                     session.set_paused(!r.paused);
                     return;
                 }
+                // In a replay, - and + (or =) step through the replay bar's speeds.
+                if let Key::Character(c) = &event.logical_key
+                    && let Some(r) = session.replay_state(state.follow_camera)
+                    && let Some(speed) = crate::ui::next_replay_speed(r.speed, c.as_str())
+                {
+                    session.set_speed(speed);
+                    return;
+                }
                 if event.logical_key == Key::Named(NamedKey::Escape) {
                     state.trainee_ui.help.open = false;
                     state.observer_ui.help.open = false;

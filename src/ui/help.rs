@@ -17,6 +17,7 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("G", "show or hide the target and forbidden regions on the tissue"),
     ("F5", "reload the scene (asks first once the session has started)"),
     ("Space", "replay: pause / play"),
+    ("- / +", "replay: slower / faster (0.25× to 4×)"),
     ("F12 / P", "save both views as PNG"),
     ("R", "write the session report"),
     ("F1 / ?", "this help"),

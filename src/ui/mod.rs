@@ -307,6 +307,16 @@ fn replay_bar(ui: &mut egui::Ui, r: ReplayState, actions: &mut Vec<Action>) {
 /// The replay speeds offered, multiples of real time.
 pub const REPLAY_SPEEDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 
+/// The replay speed a key gives from `speed`: `-` the next slower of [`REPLAY_SPEEDS`], `+` (or `=`, the
+/// same key unshifted) the next faster; `None` for any other key or past either end.
+pub fn next_replay_speed(speed: f32, key: &str) -> Option<f32> {
+    match key {
+        "-" => REPLAY_SPEEDS.iter().rev().copied().find(|&s| s < speed),
+        "+" | "=" => REPLAY_SPEEDS.iter().copied().find(|&s| s > speed),
+        _ => None,
+    }
+}
+
 /// The observer window's panels: the monitor and the assessment on the right, status on top.
 #[derive(Default)]
 pub struct ObserverUi {
@@ -352,5 +362,20 @@ impl ObserverUi {
         let rect = ui.available_rect_before_wrap();
         self.help.ui(ui, frame, actions);
         rect
+    }
+}
+
+#[cfg(test)]
+mod replay_speed_tests {
+    use super::next_replay_speed;
+
+    #[test]
+    fn minus_and_plus_step_through_the_replay_speeds() {
+        assert_eq!(next_replay_speed(1.0, "-"), Some(0.5));
+        assert_eq!(next_replay_speed(1.0, "+"), Some(2.0));
+        assert_eq!(next_replay_speed(2.0, "="), Some(4.0));
+        assert_eq!(next_replay_speed(0.25, "-"), None);
+        assert_eq!(next_replay_speed(4.0, "+"), None);
+        assert_eq!(next_replay_speed(1.0, "x"), None);
     }
 }
