@@ -1,7 +1,7 @@
 //! Where a cut looks: the links of one kind bucketed by where their first end rests in the surface's
 //! `(u, v)` plane, so that a blade stroke visits only the links near it and a cut costs what it
 //! crosses, not the whole sheet. Elements move, so a query widens its box by how far any element has
-//! drifted from rest (measured again whenever the body has moved since the last cut) and by the
+//! drifted from rest (`Tissue::drift`: followed step by step from the disturbed region) and by the
 //! longest rest link: every link a stroke can reach is visited, and the links it hits are cut in id
 //! order, exactly as a scan of every link would cut them.
 

@@ -13,7 +13,8 @@ pub const SETTLED: f32 = 1e-7;
 
 /// Most element updates one step's relaxation makes: a region larger than a sweep's share of this
 /// gets fewer sweeps (never none), so a step costs a bounded amount however much of the sheet a lift
-/// disturbs (about 1 ms on a 2-core AVX2 machine), and the region, kept until it converges, goes on
+/// disturbs (one sweep of a 20 000-element region measured about 0.8 ms on the development machine,
+/// busy), and the region, kept until it converges, goes on
 /// relaxing over the next steps. Counted in updates, not time, so that runs stay bit for bit
 /// reproducible.
 pub const REGION_UPDATES: usize = 1 << 15;
