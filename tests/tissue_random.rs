@@ -36,7 +36,7 @@ fn run(commands: &[(Command, u8)]) -> Result<Vec<[f32; 3]>, TestCaseError> {
         .collect();
     let mut world =
         World::new(tissue, WorldConfig { relax: RelaxBudget::sweeps(2), ..WorldConfig::default() });
-    for (c, steps) in commands {
+    for (ci, (c, steps)) in commands.iter().enumerate() {
         world.push(c.clone());
         for _ in 0..*steps {
             world.step();
@@ -49,7 +49,15 @@ fn run(commands: &[(Command, u8)]) -> Result<Vec<[f32; 3]>, TestCaseError> {
         let sheet = t.layers()[0].count as usize;
         for i in 0..sheet {
             let (l, u) = (t.body().positions()[i], t.body().positions()[i + sheet]);
-            prop_assert!(u[2] - l[2] >= t.min_gap() - 1e-5, "layers crossed");
+            prop_assert!(
+                u[2] - l[2] >= t.min_gap() - 1e-5,
+                "layers crossed at element {} after command {} ({:?}): gap {} < {}",
+                i,
+                ci,
+                c,
+                u[2] - l[2],
+                t.min_gap()
+            );
         }
     }
     Ok(world.tissue().body().positions().to_vec())

@@ -529,8 +529,9 @@ impl Tissue {
 
     /// Keeps the layers apart: wherever an element of the upper layer has come closer than the minimum
     /// gap to its partner below (along the normal), the free one of the two moves away (both halfway
-    /// when both are free), each by a chain reaction along the normal (pins may cut it short), so
-    /// that the layers' limits hold. Returns how many pairs were corrected.
+    /// when both are free), each by a chain reaction along the normal, so that the layers' limits
+    /// hold; where pins or holds cut those short, the rest is written directly, so the layers never
+    /// cross. Returns how many pairs were corrected.
     pub fn enforce_contact(&mut self) -> u32 {
         if self.layers.len() != 2 || !matches!(self.geometry, Geometry::Surface(_)) {
             return 0;
@@ -568,6 +569,21 @@ impl Tissue {
                 if self.body.deform(&mut self.ws, e, [p[0], p[1], p[2] + d], Pass::Normal).is_ok() {
                     self.activate_moved();
                 }
+            }
+            // Chain reactions stop at pins and holds: a held patch pushed down onto a lower layer
+            // stretched to its pins leaves both reactions short. The layers must still not cross, so
+            // what is left of the gap is written directly (split as above); the links beside the pair
+            // may then sit past their limits until relaxation and the next pull share it out.
+            let (Ok(pl), Ok(pu)) = (self.body.position(lower), self.body.position(upper)) else { continue };
+            let short = self.min_gap - (pu[2] - pl[2]);
+            if short > 0.0 {
+                let (dl, du) = match (free_l, free_u) {
+                    (true, true) => (-0.5 * short, 0.5 * short),
+                    (true, false) => (-short, 0.0),
+                    _ => (0.0, short),
+                };
+                let _ = self.body.set_position(lower, [pl[0], pl[1], pl[2] + dl]);
+                let _ = self.body.set_position(upper, [pu[0], pu[1], pu[2] + du]);
             }
             self.activate(lower.0);
             self.activate(upper.0);
