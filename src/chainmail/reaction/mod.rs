@@ -214,7 +214,10 @@ impl Body {
         let Some(first) = first.filter(|_| !sc.free.is_empty()) else { return result };
         let size = delta.iter().fold(0.0f32, |m, d| m.max(*d));
         // One chain reaction with the seeds a share `t` of their way (exactly the goals at the end).
+        // A measured reaction stops once what it has measured already leaves no room for a move: the
+        // search would then end with nothing moved however much more it measured (`Measure`).
         let mut attempt = |body: &mut Body, ws: &mut Workspace, t: f32, measure: bool| -> Outcome {
+            let measure = measure.then_some(Measure { share: t, delta, size });
             if t >= 1.0 {
                 return body.chain_reaction(ws, &sc.free, &sc.goals, mask, measure);
             }
@@ -225,15 +228,7 @@ impl Body {
             body.chain_reaction(ws, &sc.free, &sc.at, mask, measure)
         };
         // The share of the move at which the fixed elements of a blocked reaction would just stay.
-        let estimate = |t: f32, excess: [f32; 3]| -> f32 {
-            let mut cut = 0.0f32;
-            for k in 0..3 {
-                if delta[k] > 0.0 {
-                    cut = cut.max(excess[k] / delta[k]);
-                }
-            }
-            t - cut
-        };
+        let estimate = |t: f32, excess: [f32; 3]| Measure { share: t, delta, size }.estimate(excess);
         let done = |mut result: Deformation, ws: &Workspace, t: f32, body: &Body| {
             result.achieved = body.pos[first as usize];
             result.fraction = t.min(1.0);
@@ -254,6 +249,7 @@ impl Body {
             if next >= hi {
                 break; // nothing measured to shorten by: bisect
             }
+            // (`lo` is 0 here, as `Measure::leaves_no_room` assumes.)
             if (next - lo) * size <= BISECT_TOLERANCE {
                 return result;
             }
@@ -299,7 +295,7 @@ impl Body {
         seeds: &[u32],
         goals: &[[f32; 3]],
         mask: [bool; 3],
-        measure: bool,
+        measure: Option<Measure>,
     ) -> Outcome {
         // Compiled for the widest vectors the workspace's level and the machine allow (pulp picks at
         // run time): the runs' portable checks are written as plain loops over lanes and vectorise.
@@ -444,11 +440,12 @@ impl Body {
                             fixed_blocks::<MASK>(lattice, link_box, [s, t, c], [m.old[s], ps, pc, q])
                         {
                             blocked = true;
-                            if !r.measure {
-                                break 'reaction;
-                            }
+                            let Some(measure) = r.measure else { break 'reaction };
                             for k in 0..3 {
                                 excess[k] = excess[k].max(x[k]);
+                            }
+                            if measure.leaves_no_room(excess) {
+                                break 'reaction;
                             }
                         }
                         continue;
@@ -475,12 +472,47 @@ impl Body {
 }
 
 /// The seeds of one chain reaction: the elements moved first and their goals; whether a blocked
-/// reaction runs to its end to be measured.
+/// reaction runs on to be measured.
 #[derive(Clone, Copy)]
 struct Seeds<'a> {
     seeds: &'a [u32],
     goals: &'a [[f32; 3]],
-    measure: bool,
+    measure: Option<Measure>,
+}
+
+/// A blocked reaction measured for the search: the seeds a share `share` of their way, `delta` the
+/// largest move of any seed per coordinate, `size` the largest of those.
+#[derive(Clone, Copy)]
+pub(super) struct Measure {
+    share: f32,
+    delta: [f32; 3],
+    size: f32,
+}
+
+impl Measure {
+    /// The share of the move at which fixed elements that would have to move `excess` would just
+    /// stay.
+    #[inline]
+    fn estimate(&self, excess: [f32; 3]) -> f32 {
+        let mut cut = 0.0f32;
+        for (&x, &d) in excess.iter().zip(&self.delta) {
+            if d > 0.0 {
+                cut = cut.max(x / d);
+            }
+        }
+        self.share - cut
+    }
+
+    /// Whether `excess`, measured so far, already leaves the search (below any share known to work,
+    /// which is 0 while it estimates) no room to move: the excess only grows as the reaction goes on,
+    /// so the search's estimate and its answer (nothing moves) are the ones the whole reaction gives.
+    /// A blocked pull that the tissue holds entirely (the forceps past where the pins let the tissue
+    /// go) then stops at the first fixed elements that hold it, not after spreading over the tent.
+    #[inline]
+    fn leaves_no_room(&self, excess: [f32; 3]) -> bool {
+        let next = self.estimate(excess);
+        next < 1.0 && next * self.size <= BISECT_TOLERANCE
+    }
 }
 
 /// One chain reaction, as an operation for [`pulp::Arch::dispatch`].
