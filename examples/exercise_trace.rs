@@ -1,7 +1,8 @@
 //! Plays the meninges exercise with the careful script at a resolution and prints one line per step
 //! (tab separated: step, total µs, each phase's µs, elements moved by each pass, relaxation sweeps,
-//! the disturbed region's size), for finding which steps of a session cost what:
-//! `target/release/examples/exercise_trace 256 192 > trace.tsv`.
+//! the disturbed region's size, the step's wall and CPU time), for finding which steps of a session cost what:
+//! `target/release/examples/exercise_trace 256 192 > trace.tsv`; another layered scene and script
+//! after the resolution: `exercise_trace 128 96 scenes/durotomy.ron scenes/scripts/durotomy_careful.ron`.
 use std::time::Instant;
 
 use dissect::runner::Player;
@@ -13,27 +14,40 @@ const CAREFUL: &str = include_str!("../scenes/scripts/meninges_careful.ron");
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = |i: usize, d: u32| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
     let (nu, nv) = (arg(1, 256), arg(2, 192));
-    let mut scene = Scene::from_str(MENINGES, "scenes/meninges.ron")?;
+    let files = (std::env::args().nth(3), std::env::args().nth(4));
+    let (scene_text, scene_name, script_text, script_name) = match files {
+        (Some(a), Some(b)) => (std::fs::read_to_string(&a)?, a, std::fs::read_to_string(&b)?, b),
+        _ => (
+            MENINGES.to_string(),
+            "scenes/meninges.ron".to_string(),
+            CAREFUL.to_string(),
+            "meninges_careful.ron".to_string(),
+        ),
+    };
+    let mut scene = Scene::from_str(&scene_text, &scene_name)?;
     if let SceneTissue::Layers(l) = &mut scene.tissue {
         l.resolution = [nu, nv];
     }
-    let script = Script::from_str(CAREFUL, "meninges_careful.ron")?;
+    let script = Script::from_str(&script_text, &script_name)?;
     let mut world = scene.build_world(false)?;
     let mut player = Player::new(script.0.clone());
     println!(
-        "step\ttotal_us\tinput\tchain\tnormal\trelax\tcontact\tcuts\tforces\tmoved_chain\tmoved_normal\tsweeps\tactive\twall_us"
+        "step\ttotal_us\tinput\tchain\tnormal\trelax\tcontact\tcuts\tforces\tmoved_chain\tmoved_normal\tsweeps\tactive\twall_us\tcpu_us"
     );
     loop {
         player.feed(&mut world);
         if player.finished() && world.pending().is_empty() {
             break;
         }
-        let t = Instant::now();
+        let (t, cpu) = (Instant::now(), cpu_time::ThreadTime::now());
         let c = world.step();
         let wall = t.elapsed().as_secs_f32() * 1e6;
+        // The thread's own CPU time: what the step costs without the time other processes took
+        // the core (a busy machine's preemptions otherwise make the p99).
+        let cpu = cpu.elapsed().as_secs_f32() * 1e6;
         let ph: Vec<String> = c.phase_us.iter().map(|p| format!("{p:.1}")).collect();
         println!(
-            "{}\t{:.1}\t{}\t{}\t{}\t{}\t{}\t{:.1}",
+            "{}\t{:.1}\t{}\t{}\t{}\t{}\t{}\t{:.1}\t{:.1}",
             c.step,
             c.total_us(),
             ph.join("\t"),
@@ -41,7 +55,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             c.moved_normal,
             c.relax_sweeps,
             world.tissue().active_count(),
-            wall
+            wall,
+            cpu
         );
     }
     Ok(())

@@ -154,6 +154,8 @@ pub struct Tissue {
     pub(crate) drift_at: Option<u64>,
     /// Scratch of the tear check: each material's tear ratio, squared.
     pub(crate) tear_scratch: Vec<Option<f32>>,
+    /// The links a tear check found past their tear ratio, broken after the scan.
+    pub(crate) tear_hits: Vec<LinkId>,
     /// World rest length of each link, metres (for stretch and tearing).
     pub(crate) rest_len: Vec<f32>,
     /// Elements per layer sheet (`nu × nv`) for layered tissue; pairs across layers differ by this.
@@ -168,6 +170,9 @@ pub struct Tissue {
     pub(crate) region_scratch: Vec<ElementId>,
     /// A bit per element, for putting the region in order.
     pub(crate) region_bits: Vec<u64>,
+    /// Where the next partial relaxation sweep of a large region starts (an element id; see
+    /// `settle::REGION_UPDATES`).
+    pub(crate) relax_cursor: u32,
     /// The last relaxation converged and nothing has moved since: [`Tissue::end_step`] may forget the
     /// disturbed region.
     pub(crate) settled: bool,
@@ -605,18 +610,58 @@ impl Tissue {
         let mut tear2 = std::mem::take(&mut self.tear_scratch);
         tear2.clear();
         tear2.extend(self.body.materials().iter().map(|m| m.tear_ratio.map(|r| r * r)));
+        let mut hits = std::mem::take(&mut self.tear_hits);
+        hits.clear();
+        // World positions straight from the lattice's where the map is a permutation (a flat surface
+        // is `(u, h, v)` exactly, a volume the identity): the same lengths, bit for bit, without a
+        // call per end.
+        let max_stretch2 = match self.geometry {
+            Geometry::Surface(Surface::Plane { .. } | Surface::Box { .. }) => {
+                self.scan_stretch(&tear2, &mut hits, |p| Vec3::new(p[0], p[2], p[1]))
+            }
+            Geometry::Volume => self.scan_stretch(&tear2, &mut hits, Vec3::from),
+            Geometry::Surface(surface) => {
+                self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(surface.to_world(p)))
+            }
+        };
         let mut torn = 0;
+        for &l in &hits {
+            if self.break_link(l, BreakReason::Tear) {
+                torn += 1;
+            }
+        }
+        if !self.active.is_empty() {
+            self.max_stretch = max_stretch2.sqrt();
+        }
+        self.tear_scratch = tear2;
+        self.tear_hits = hits;
+        torn
+    }
+
+    /// The tear check's scan of the disturbed region: each intact link with an end there, from its
+    /// `a` end, in the region's order; links past their material's tear ratio go to `hits` (in the
+    /// order met). Returns the largest squared stretch of the layers' links. `world` maps lattice
+    /// coordinates to the world.
+    #[inline(always)]
+    fn scan_stretch(
+        &self,
+        tear2: &[Option<f32>],
+        hits: &mut Vec<LinkId>,
+        world: impl Fn([f32; 3]) -> Vec3,
+    ) -> f32 {
+        let lat = self.body.lattice();
+        let (pos, rest_len, kind) = (self.body.positions(), &self.rest_len[..], &self.link_kind[..]);
         let mut max_stretch2 = 0.0f32;
-        let count = self.active.len();
-        for k in 0..count {
-            let e = self.active[k].index();
-            let (s0, s1) = {
-                let lat = self.body.lattice();
-                (lat.adj_start[e] as usize, lat.adj_start[e + 1] as usize)
+        for &e in &self.active {
+            let e = e.index();
+            let (Some(&s0), Some(&s1), Some(&p)) =
+                (lat.adj_start.get(e), lat.adj_start.get(e + 1), pos.get(e))
+            else {
+                continue;
             };
-            let Some(pa) = self.world_position(ElementId(e as u32)) else { continue };
-            for s in s0..s1 {
-                let raw = self.body.lattice().adj_link[s];
+            let pa = world(p);
+            for s in s0 as usize..s1 as usize {
+                let raw = lat.adj_link[s];
                 if raw & crate::chainmail::SIDE_B_BIT != 0 {
                     continue; // each link is checked from its `a` end only
                 }
@@ -624,28 +669,20 @@ impl Tissue {
                 if !self.body.link_intact(l) {
                     continue;
                 }
-                let b = ElementId(self.body.lattice().adj_nbr[s]);
-                let Some(pb) = self.world_position(b) else { continue };
-                let rest = self.rest_len[l.index()].max(f32::MIN_POSITIVE);
-                let stretch2 = Vec3::from(pb).distance_squared(Vec3::from(pa)) / (rest * rest);
+                let Some(&q) = pos.get(lat.adj_nbr[s] as usize) else { continue };
+                let rest = rest_len[l.index()].max(f32::MIN_POSITIVE);
+                let stretch2 = world(q).distance_squared(pa) / (rest * rest);
                 // The force proxy is the layers' stretch: fibres are meant to stretch before they are cut.
-                if matches!(self.link_kind[l.index()], LinkKind::Layer(_)) {
+                if matches!(kind[l.index()], LinkKind::Layer(_)) {
                     max_stretch2 = max_stretch2.max(stretch2);
                 }
                 let ratio2 = self.body.link_material(l).and_then(|m| tear2.get(m.index()).copied().flatten());
-                if let Some(ratio2) = ratio2
-                    && stretch2 > ratio2
-                    && self.break_link(l, BreakReason::Tear)
-                {
-                    torn += 1;
+                if ratio2.is_some_and(|r| stretch2 > r) {
+                    hits.push(l);
                 }
             }
         }
-        if count > 0 {
-            self.max_stretch = max_stretch2.sqrt();
-        }
-        self.tear_scratch = tear2;
-        torn
+        max_stretch2
     }
 
     /// World length of a link over its world rest length.
