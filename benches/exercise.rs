@@ -1,9 +1,13 @@
-//! The exercise itself: the meninges scene at a given resolution, played with the careful
-//! script (`scenes/scripts/meninges_careful.ron`) step by step, as a trainee's session runs it.
+//! The exercises themselves, at a given resolution, played with their careful scripts step by step, as
+//! a trainee's session runs them: `exercise/meninges_careful/...` (the meninges scene, the layers
+//! lifted and the fibres cut under them) and `exercise/durotomy_careful/...` (the default exercise:
+//! a U-shaped flap cut in the dura, reflected, the arachnoid freed under it).
 //!
 //! Criterion reports the mean step; p50 and p99 of the steps timed are printed after each bench
-//! (a step's cost depends on where in the script it falls, so the tail matters as much as the mean).
-//! When the script ends the world is rebuilt outside the timed region and the script starts again.
+//! (a step's cost depends on where in the script it falls, so the tail matters as much as the mean),
+//! with the p99 of the steps' CPU time (the thread's own: on a busy machine the wall time's tail is
+//! mostly other processes taking the core). When the script ends the world is rebuilt outside the
+//! timed region and the script starts again.
 
 use std::time::{Duration, Instant};
 
@@ -14,9 +18,11 @@ use dissect::simulation::World;
 
 const MENINGES: &str = include_str!("../scenes/meninges.ron");
 const CAREFUL: &str = include_str!("../scenes/scripts/meninges_careful.ron");
+const DUROTOMY: &str = include_str!("../scenes/durotomy.ron");
+const DUROTOMY_CAREFUL: &str = include_str!("../scenes/scripts/durotomy_careful.ron");
 
-fn scene_at(nu: u32, nv: u32) -> Scene {
-    let mut scene = Scene::from_str(MENINGES, "scenes/meninges.ron").expect("meninges scene");
+fn scene_at(text: &str, nu: u32, nv: u32) -> Scene {
+    let mut scene = Scene::from_str(text, "scene").expect("scene");
     if let SceneTissue::Layers(l) = &mut scene.tissue {
         l.resolution = [nu, nv];
     }
@@ -37,47 +43,63 @@ impl Session {
         Self { scene, script, world, player }
     }
 
-    /// One step of the script, timed; restarts the script (untimed) when it has ended.
-    fn step(&mut self) -> Duration {
+    /// One step of the script, timed (wall and the thread's CPU time); restarts the script (untimed)
+    /// when it has ended.
+    fn step(&mut self) -> (Duration, Duration) {
         self.player.feed(&mut self.world);
         if self.player.finished() && self.world.pending().is_empty() {
             self.world = self.scene.build_world(false).expect("world");
             self.player = Player::new(self.script.0.clone());
             self.player.feed(&mut self.world);
         }
-        let t = Instant::now();
+        let (t, cpu) = (Instant::now(), cpu_time::ThreadTime::now());
         self.world.step();
-        t.elapsed()
+        (t.elapsed(), cpu.elapsed())
     }
 }
 
 fn exercise_benches(c: &mut Criterion) {
-    let script = Script::from_str(CAREFUL, "meninges_careful.ron").expect("careful script");
-    let mut group = c.benchmark_group("exercise/meninges_careful");
+    let meninges = Script::from_str(CAREFUL, "meninges_careful.ron").expect("careful script");
+    exercise(c, "meninges_careful", MENINGES, &meninges, &[(128, 96), (256, 192), (512, 384)]);
+    let durotomy = Script::from_str(DUROTOMY_CAREFUL, "durotomy_careful.ron").expect("careful script");
+    exercise(c, "durotomy_careful", DUROTOMY, &durotomy, &[(64, 48), (128, 96), (256, 192)]);
+}
+
+fn exercise(c: &mut Criterion, name: &str, scene: &str, script: &Script, sizes: &[(u32, u32)]) {
+    let mut group = c.benchmark_group(format!("exercise/{name}"));
     group.sample_size(10).measurement_time(Duration::from_secs(10)).warm_up_time(Duration::from_secs(2));
-    for (nu, nv) in [(128u32, 96u32), (256, 192), (512, 384)] {
-        let mut session = Session::new(scene_at(nu, nv), script.clone());
-        let mut samples: Vec<f32> = Vec::new();
+    for &(nu, nv) in sizes {
+        // Built on first use: a bench the filter leaves out builds no world.
+        let mut session: Option<Session> = None;
+        let (mut samples, mut cpu): (Vec<f32>, Vec<f32>) = (Vec::new(), Vec::new());
         group.throughput(Throughput::Elements(2 * u64::from(nu) * u64::from(nv)));
         group.bench_function(format!("{nu}x{nv}"), |b| {
             b.iter_custom(|iters| {
                 let mut total = Duration::ZERO;
+                let session =
+                    session.get_or_insert_with(|| Session::new(scene_at(scene, nu, nv), script.clone()));
                 for _ in 0..iters {
-                    let d = session.step();
+                    let (d, c) = session.step();
                     samples.push(d.as_secs_f32() * 1e6);
+                    cpu.push(c.as_secs_f32() * 1e6);
                     total += d;
                 }
                 total
             })
         });
+        if samples.is_empty() {
+            continue;
+        }
         let s = TimeStats::of(&mut samples);
+        let c = TimeStats::of(&mut cpu);
         println!(
-            "exercise/meninges_careful/{nu}x{nv}: {} steps, mean {:.0} µs, p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs",
+            "exercise/{name}/{nu}x{nv}: {} steps, mean {:.0} µs, p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs; CPU time p99 {:.0} µs",
             samples.len(),
             s.mean,
             s.p50,
             s.p99,
-            s.max
+            s.max,
+            c.p99
         );
     }
     group.finish();
