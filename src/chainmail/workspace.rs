@@ -4,7 +4,6 @@
 
 use super::body::Body;
 use super::ids::ElementId;
-use super::reaction::SearchScratch;
 use super::simd::SimdLevel;
 use super::stencil::Stencil;
 
@@ -115,4 +114,14 @@ impl Workspace {
         // Forget the moves: a fresh generation unstamps them.
         self.next_generation();
     }
+}
+
+/// Scratch of a deformation's search, kept in the workspace so that no step allocates: the seeds
+/// that move, where they started, their goals, and their goals at a share of the move.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct SearchScratch {
+    pub(crate) free: Vec<u32>,
+    pub(crate) starts: Vec<[f32; 3]>,
+    pub(crate) goals: Vec<[f32; 3]>,
+    pub(crate) at: Vec<[f32; 3]>,
 }

@@ -10,7 +10,7 @@ use super::coords::{norm, sub};
 use super::error::{ChainMailError, finite};
 use super::ids::ElementId;
 use super::lattice::{Lattice, SIDE_B};
-use super::workspace::Workspace;
+use super::workspace::{SearchScratch, Workspace};
 use arrays::{Moving, Patterns, Run, Slices, candidate_box, clamp_masked};
 use runs::{Wide, batch};
 
@@ -68,16 +68,6 @@ pub struct Deformation {
     pub moved: u32,
     /// Chain reactions tried (1 when nothing blocked).
     pub attempts: u32,
-}
-
-/// Scratch of a deformation's search, kept in the workspace so that no step allocates: the seeds
-/// that move, where they started, their goals, and their goals at a share of the move.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct SearchScratch {
-    free: Vec<u32>,
-    starts: Vec<[f32; 3]>,
-    goals: Vec<[f32; 3]>,
-    at: Vec<[f32; 3]>,
 }
 
 /// How a chain reaction ended.
