@@ -3,8 +3,9 @@
 //! step. Links that go past their tear ratio break (and are counted as torn); every other link stays in
 //! its constraint box, up to rounding.
 
+mod common;
+
 use dissect::chainmail::LinkId;
-use dissect::scene::{Scene, Tissue as SceneTissue};
 use dissect::simulation::Command;
 use dissect::simulation::{InstrumentKind, World};
 use dissect::tissue::CutDepth;
@@ -14,12 +15,7 @@ use proptest::prelude::*;
 const SLACK: f32 = 1e-4;
 
 fn world(nu: u32, nv: u32) -> World {
-    let mut scene =
-        Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meninges.ron")).expect("meninges scene");
-    if let SceneTissue::Layers(l) = &mut scene.tissue {
-        l.resolution = [nu, nv];
-    }
-    scene.build_world(false).expect("world")
+    common::meninges(nu, nv)
 }
 
 #[derive(Clone, Debug)]

@@ -6,17 +6,13 @@
 //! spreads as a square pyramid (straight ridges along the axes, lower along the diagonals), and
 //! relaxation, which never moves an element out of its links' boxes, cannot round it.
 
+mod common;
+
 use dissect::chainmail::ElementId;
-use dissect::scene::{Scene, Tissue as SceneTissue};
 use dissect::simulation::{Command, InstrumentKind, World};
 
 fn world(nu: u32, nv: u32) -> World {
-    let mut scene =
-        Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meninges.ron")).expect("meninges scene");
-    if let SceneTissue::Layers(l) = &mut scene.tissue {
-        l.resolution = [nu, nv];
-    }
-    scene.build_world(false).expect("world")
+    common::meninges(nu, nv)
 }
 
 /// The dura's height above rest, bilinear between its elements, at lattice point `(u, v)`.

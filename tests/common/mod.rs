@@ -2,6 +2,8 @@
 #![allow(dead_code)]
 
 use dissect::chainmail::Material;
+use dissect::scene::{Scene, Tissue as SceneTissue};
+use dissect::simulation::World;
 use dissect::surface::Surface;
 use dissect::tissue::{ConnectiveSpec, LayerSpec, LayeredSpec, Pinning, Tissue, TissueSpec};
 
@@ -44,4 +46,14 @@ pub fn plane(n: usize) -> Tissue {
         Pinning::Boundary,
     )))
     .expect("tissue")
+}
+
+/// The meninges scene (`scenes/meninges.ron`) at another resolution, built.
+pub fn meninges(nu: u32, nv: u32) -> World {
+    let mut scene =
+        Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meninges.ron")).expect("meninges scene");
+    if let SceneTissue::Layers(l) = &mut scene.tissue {
+        l.resolution = [nu, nv];
+    }
+    scene.build_world(false).expect("world")
 }
