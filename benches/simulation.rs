@@ -6,8 +6,10 @@
 //! this thread waited for a batch of `iters` steps (1 ms when it keeps 1 kHz; a batch ends at the first
 //! frame published after its last step, so short batches read high); the 99th percentile of
 //! the lateness of a step's start after its deadline over every step of the run (the issue's budget:
-//! 200 µs on the 2-core machine), the worst step-to-step jitter of the last second and the achieved
-//! steps per second are printed after the bench.
+//! 200 µs on the 2-core machine), the worst step-to-step jitter of the last second, the achieved
+//! steps per second and how the thread was scheduled (real-time where the system grants it,
+//! `runner::priority`) are printed after the bench. Run it beside the trainer's windows
+//! (`dissect --frames 100000` under Xvfb) to measure the issue's case.
 
 use std::time::{Duration, Instant};
 
@@ -54,14 +56,18 @@ fn thread_benches(c: &mut Criterion) {
     let seconds = started.elapsed().as_secs_f64();
     println!(
         "simulation/thread/jitter: p99 lateness of a step's start {:.0} µs over {} steps at {:.0} Hz \
-         ({:.0} steps/s overall; last second: {:.0} steps/s, worst lateness {:.0} µs, worst jitter {:.0} µs)",
+         ({:.0} steps/s overall; last second: {:.0} steps/s, worst lateness {:.0} µs, worst jitter {:.0} µs; {})",
         pace.total_p99_late_us,
         pace.total_steps,
         pace.rate_hz,
         pace.total_steps as f64 / seconds,
         pace.steps_per_second,
         pace.worst_late_us,
-        pace.worst_jitter_us
+        pace.worst_jitter_us,
+        match sim.scheduling() {
+            Ok(()) => "real-time scheduling".to_string(),
+            Err(why) => why.to_string(),
+        }
     );
     let _ = sim.stop();
 }

@@ -107,6 +107,11 @@ pub fn run(options: AppOptions) -> Result<(), AppError> {
         Source::Replay(path) => Session::replay(path)?,
         Source::Demo(script) => Session::demo(options.scene.as_deref(), script)?,
     };
+    // How the simulation thread is scheduled (`runner::priority`), in one line.
+    match session.scheduling() {
+        Ok(()) => println!("dissect: simulation thread: real-time scheduling"),
+        Err(why) => println!("dissect: simulation thread: normal scheduling ({why})"),
+    }
     let event_loop = EventLoop::new().map_err(|e| AppError::Window(e.to_string()))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App { options, session, state: None, error: None, finished: false };
@@ -162,13 +167,16 @@ impl App {
                 let pace = self.session.published().pace;
                 println!(
                     "dissect: {} frames in {seconds:.1} s ({:.1} fps), {steps} steps ({:.0} steps/s); \
-                     simulation thread, last second: {:.0} steps/s, worst jitter {:.0} µs, p99 late {:.0} µs",
+                     simulation thread, last second: {:.0} steps/s, worst jitter {:.0} µs, p99 late {:.0} µs; \
+                     whole run: p99 late {:.0} µs over {} steps",
                     state.frames,
                     state.frames as f64 / seconds.max(1e-9),
                     steps as f64 / seconds.max(1e-9),
                     pace.steps_per_second,
                     pace.worst_jitter_us,
-                    pace.p99_late_us
+                    pace.p99_late_us,
+                    pace.total_p99_late_us,
+                    pace.total_steps
                 );
             }
         }

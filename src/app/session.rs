@@ -295,6 +295,11 @@ impl Session {
         }
     }
 
+    /// Whether the simulation thread was granted real-time scheduling, or why not.
+    pub fn scheduling(&self) -> Result<(), &str> {
+        self.sim.scheduling()
+    }
+
     /// What the thread published last (the world as of a recent step).
     pub fn published(&self) -> &Published {
         self.sim.current()
@@ -381,6 +386,7 @@ impl Session {
             p99_late_us: pace.p99_late_us,
             input_lag_steps: pace.input_lag_steps,
             behind: pace.behind,
+            realtime: pace.realtime,
         });
         self.timing.push(FrameSample {
             t: self.started.elapsed().as_secs_f64(),

@@ -6,6 +6,8 @@
 
 mod episode;
 mod player;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod priority;
 mod stats;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod thread;

@@ -1,6 +1,8 @@
 //! The simulation thread: an [`Episode`] stepped on a thread of its own at its world's rate, each step
 //! started at its deadline (a native sleep finished by a short spin, `spin_sleep`), whatever the windows'
-//! frame rate. Native only: the browser has no threads here and steps its episode in the frame loop.
+//! frame rate. The thread asks for real-time scheduling where the system grants it, and gives it up
+//! while it could hold a core (see [`super::priority`]). Native only: the browser has no threads here
+//! and steps its episode in the frame loop.
 //!
 //! Input reaches the thread through a channel ([`Input`], `crossbeam-channel`), each batch stamped with
 //! the step its sender last saw; the thread gives it to the world before its next step, and the
@@ -34,6 +36,15 @@ pub const PUBLISH_EVERY: Duration = Duration::from_micros(16_667);
 pub const MAX_LAG: Duration = Duration::from_millis(50);
 /// How long an idle thread (paused, or a replay that has ended) waits for input between looks.
 const IDLE_WAIT: Duration = Duration::from_millis(20);
+/// How long before a deadline the thread stops sleeping and spins: the scheduler's wake-up is not
+/// exact (a normal thread's timer slack is 50 µs, then the time to be scheduled), spinning is.
+const SPIN: Duration = Duration::from_micros(125);
+/// The same for a real-time thread (no timer slack, scheduled at once): less time spinning, which is
+/// time the windows do not get.
+const SPIN_REALTIME: Duration = Duration::from_micros(50);
+/// A real-time thread whose steps took this share of their period on average over a second gives up
+/// real-time scheduling for the next second (it would hold a core the windows need).
+const REALTIME_MAX_LOAD: f64 = 0.75;
 
 /// One thing given to the world: a command, or a grasp to resolve against the world the thread has.
 #[derive(Clone, Debug, PartialEq)]
@@ -109,6 +120,8 @@ pub struct Pace {
     pub mean_step_us: f32,
     /// Whether the thread gave up deadlines it could not keep in that second.
     pub behind: bool,
+    /// Whether the thread runs with real-time scheduling now (see [`super::priority`]).
+    pub realtime: bool,
     /// Steps between the frame a batch of input was given on and the step it reached the world.
     pub input_lag_steps: u64,
     /// Steps run since the thread started (or since the episode was replaced).
@@ -201,7 +214,8 @@ impl PaceMeter {
         }
     }
 
-    fn step(&mut self, start: Instant, deadline: Instant, took: Duration) {
+    /// Counts a step; true when it closed a second (its figures are then in `done`).
+    fn step(&mut self, start: Instant, deadline: Instant, took: Duration) -> bool {
         self.steps += 1;
         self.step_us += took.as_secs_f64() * 1e6;
         let late = start.saturating_duration_since(deadline);
@@ -239,7 +253,9 @@ impl PaceMeter {
             if let Some(h) = self.late.as_mut() {
                 h.reset();
             }
+            return true;
         }
+        false
     }
 
     /// The thread stopped stepping for a while (paused, idle): intervals across the pause are not jitter.
@@ -254,6 +270,7 @@ pub struct SimThread {
     events: Receiver<Event>,
     output: triple_buffer::Output<Published>,
     handle: Option<JoinHandle<Episode>>,
+    scheduling: Result<(), String>,
 }
 
 impl SimThread {
@@ -266,10 +283,22 @@ impl SimThread {
         let (publisher, output) = triple_buffer::triple_buffer(&first);
         let (input, inputs) = crossbeam_channel::unbounded();
         let (say, events) = crossbeam_channel::unbounded();
-        let handle = std::thread::Builder::new()
-            .name("dissect-sim".into())
-            .spawn(move || run(episode, &inputs, &say, publisher))?;
-        Ok(Self { input, events, output, handle: Some(handle) })
+        let (told, scheduled) = crossbeam_channel::bounded(1);
+        let handle = std::thread::Builder::new().name("dissect-sim".into()).spawn(move || {
+            let granted = super::priority::realtime();
+            let realtime = granted.is_ok();
+            let _ = told.send(granted);
+            run(episode, &inputs, &say, publisher, realtime)
+        })?;
+        let scheduling = scheduled
+            .recv_timeout(Duration::from_secs(5))
+            .unwrap_or_else(|_| Err("the simulation thread did not say how it is scheduled".into()));
+        Ok(Self { input, events, output, handle: Some(handle), scheduling })
+    }
+
+    /// Whether the thread was granted real-time scheduling when it started, or why not.
+    pub fn scheduling(&self) -> Result<(), &str> {
+        self.scheduling.as_ref().map(|_| ()).map_err(String::as_str)
     }
 
     /// Sends the thread an input (dropped if the thread has ended).
@@ -335,6 +364,22 @@ struct Control {
     lag: u64,
     speed: f64,
     fast_forward: Option<u64>,
+    /// Whether the thread may have real-time scheduling (it was granted it at the start).
+    may_realtime: bool,
+    /// Whether it has it now.
+    realtime: bool,
+}
+
+impl Control {
+    /// Takes or gives up real-time scheduling (when it was granted at all).
+    fn set_realtime(&mut self, on: bool) {
+        if self.may_realtime && on != self.realtime {
+            let done = if on { super::priority::realtime() } else { super::priority::normal() };
+            if done.is_ok() {
+                self.realtime = on;
+            }
+        }
+    }
 }
 
 /// Hands an input to the episode (or to the loop's control).
@@ -385,6 +430,13 @@ fn messages(episode: &mut Episode, say: &Sender<Event>) {
     }
 }
 
+/// Whether a thread that kept `pace` over its last second may be real-time for the next: only while its
+/// steps leave the core free most of the time and it gave up no deadline.
+fn keeps_realtime(pace: &Pace, period: Duration) -> bool {
+    let load = f64::from(pace.mean_step_us) * 1e-6 / period.as_secs_f64();
+    !pace.behind && load < REALTIME_MAX_LOAD
+}
+
 /// The step period and a fresh pace meter for the episode's rate at `speed` (a replay's 0.25× to 4×).
 fn pace(episode: &Episode, speed: f64) -> (Duration, PaceMeter) {
     let rate_hz = episode.world().config().rate_hz * speed;
@@ -398,11 +450,12 @@ fn run(
     inputs: &Receiver<Input>,
     say: &Sender<Event>,
     mut publisher: triple_buffer::Input<Published>,
+    realtime: bool,
 ) -> Episode {
-    let mut control = Control { paused: false, lag: 0, speed: 1.0, fast_forward: None };
+    let mut control =
+        Control { paused: false, lag: 0, speed: 1.0, fast_forward: None, may_realtime: realtime, realtime };
     let mut speed = control.speed;
     let (mut period, mut meter) = pace(&episode, speed);
-    let sleeper = spin_sleep::SpinSleeper::default();
     let mut deadline = Instant::now();
     let mut last_publish: Option<Instant> = None;
     let mut dirty = true;
@@ -426,7 +479,9 @@ fn run(
             }
         }
         if let Some(target) = control.fast_forward {
-            // A seek: no deadlines until the target, the frame refilled as it goes (its progress).
+            // A seek: no deadlines until the target, the frame refilled as it goes (its progress);
+            // flat out, so with normal scheduling (the windows keep their share of the cores).
+            control.set_realtime(false);
             let arrived = episode.world().step_count() >= target || episode.finished();
             if !arrived && episode.step().is_some() {
                 messages(&mut episode, say);
@@ -438,6 +493,7 @@ fn run(
                 continue;
             }
             control.fast_forward = None;
+            control.set_realtime(true);
             meter.idle();
             deadline = Instant::now();
             publish(&mut publisher, &episode, &meter, &control);
@@ -467,12 +523,18 @@ fn run(
             deadline = Instant::now();
             continue;
         }
-        sleeper.sleep_until(deadline);
+        // Spinning, not yielding: a yield may hand the core to the renderer's threads for a slice.
+        let spin = if control.realtime { SPIN_REALTIME } else { SPIN };
+        spin_sleep::SpinSleeper::new(spin.as_nanos() as u32)
+            .with_spin_strategy(spin_sleep::SpinStrategy::SpinLoopHint)
+            .sleep_until(deadline);
         let start = Instant::now();
         let stepped = episode.step().is_some();
         let end = Instant::now();
         if stepped {
-            meter.step(start, deadline, end - start);
+            if meter.step(start, deadline, end - start) {
+                control.set_realtime(keeps_realtime(&meter.done, period));
+            }
             dirty = true;
         }
         messages(&mut episode, say);
@@ -499,6 +561,7 @@ fn publish(
     let frame = publisher.input_buffer_mut();
     frame.fill(episode);
     frame.pace = Pace {
+        realtime: control.realtime,
         input_lag_steps: control.lag,
         total_p99_late_us: p99_us(meter.total_late.as_ref()),
         ..meter.done
@@ -562,6 +625,41 @@ mod tests {
         assert_eq!(sim.latest().view.step_count(), b + 3000, "paused after the fast-forward");
         let (episode, _) = sim.stop();
         assert_eq!(episode.map(|e| e.world().step_count()), Some(b + 3000));
+    }
+
+    #[test]
+    fn real_time_is_given_up_by_a_thread_that_would_hold_a_core() {
+        let ms = Duration::from_millis(1);
+        let pace = |mean_step_us, behind| Pace { mean_step_us, behind, ..Pace::default() };
+        assert!(keeps_realtime(&pace(300.0, false), ms));
+        assert!(!keeps_realtime(&pace(800.0, false), ms), "steps take most of the period");
+        assert!(!keeps_realtime(&pace(300.0, true), ms), "deadlines were given up");
+        assert!(keeps_realtime(&pace(300.0, false), ms / 2), "a 2x replay: 60 % of its period");
+        assert!(!keeps_realtime(&pace(300.0, false), ms / 4), "a 4x replay: longer than its period");
+    }
+
+    #[test]
+    fn a_real_time_thread_seeks_with_normal_scheduling() {
+        let mut sim = SimThread::spawn(episode()).expect("thread");
+        if let Err(why) = sim.scheduling() {
+            eprintln!("skipped where real-time scheduling is not granted: {why}");
+            return;
+        }
+        let wait = |sim: &mut SimThread, what: &str, until: &dyn Fn(&Published) -> bool| {
+            let t = Instant::now();
+            while !until(sim.latest()) {
+                assert!(t.elapsed() < Duration::from_secs(60), "{what}");
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        };
+        wait(&mut sim, "real time at first", &|p| p.pace.realtime && p.view.step_count() > 0);
+        let target = sim.latest().view.step_count() + 50_000;
+        sim.send(Input::FastForward(target));
+        wait(&mut sim, "no real time while seeking", &|p| p.seeking.is_some() && !p.pace.realtime);
+        wait(&mut sim, "real time again after", &|p| {
+            p.seeking.is_none() && p.pace.realtime && p.view.step_count() >= target
+        });
+        let _ = sim.stop();
     }
 
     #[test]

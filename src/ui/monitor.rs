@@ -20,8 +20,12 @@ impl View for MonitorPanel {
         ));
         if let Some(p) = t.pace() {
             ui.label(format!(
-                "simulation thread: {:.0} steps/s · worst jitter {:.0} µs · p99 late {:.0} µs · input lag {} steps",
-                p.steps_per_second, p.worst_jitter_us, p.p99_late_us, p.input_lag_steps
+                "simulation thread{}: {:.0} steps/s · worst jitter {:.0} µs · p99 late {:.0} µs · input lag {} steps",
+                if p.realtime { " (real-time)" } else { "" },
+                p.steps_per_second,
+                p.worst_jitter_us,
+                p.p99_late_us,
+                p.input_lag_steps
             ));
         }
         let total = c.total_us().max(f32::MIN_POSITIVE);

@@ -35,6 +35,8 @@ pub struct ThreadPace {
     pub input_lag_steps: u64,
     /// Whether the thread gave up deadlines it could not keep.
     pub behind: bool,
+    /// Whether the thread has real-time scheduling.
+    pub realtime: bool,
 }
 
 /// A rolling history of [`FrameSample`]s, and the simulation thread's pace when there is one.
