@@ -20,21 +20,20 @@ struct Camera {
     regions: array<vec4<f32>, 4>,
     // Per region: 0 unused, 1 target rect, 2 forbidden rect, 3 target disc, 4 forbidden disc.
     region_kinds: vec4<f32>,
-    // The planned incision: six (u, v) points in surface fractions, two per vector (unused points
-    // repeat the last, or lie at 100 when there is no incision).
-    incision: array<vec4<f32>, 3>,
 };
 
 struct Object {
     model: mat4x4<f32>,
     // Linear RGBA.
     color: vec4<f32>,
-    // Meshes: x specular strength, y shininess, z pattern (tissue: 0 grain, 1 vessels, 2 plain;
-    // solids: 1 for polished steel), w tissue: 1 on the layer the planned incision is drawn on. Lines: z width in pixels, w stretch at which fibres tear
-    // (0: none), x 1 for round dots.
+    // Meshes: x specular strength, y shininess, z (solids) 1 for polished steel. Lines: z width in
+    // pixels, w stretch at which fibres tear (0: none), x 1 for round dots, y 1 for a flat (untubed)
+    // line.
     params: vec4<f32>,
     // Tissue: xy texture repeats per unit of surface fraction along u and v.
     extra: vec4<f32>,
+    // Tissue: rgb the colour of the pattern's vessels (linear).
+    detail: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> camera: Camera;

@@ -5,7 +5,8 @@
 // Fibres thin and whiten as they stretch: width over the square root of the stretch (a strand keeps its
 // volume), colour towards white as the stretch nears the tear stretch (object.params.w). With
 // object.params.x = 1 each segment's ends are extended by half the width and the quad is cut to a
-// disc: a zero-length segment draws a round dot (the cut-fibre marks).
+// disc: a zero-length segment draws a round dot (the cut-fibre marks, in `fs_overlay`). With
+// object.params.y = 1 the line is flat, not shaded as a tube (the planned incision's marker).
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
@@ -69,12 +70,26 @@ fn vs_main(
     return out;
 }
 
+// Fibres, stubs and flat lines (the planned incision). No `discard` here: a shader that may discard
+// makes a software rasteriser shade a pixel before its depth test, and most fibres lie hidden under
+// the upper layer.
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
+    return line_color(in);
+}
+
+fn line_color(in: VsOut) -> vec4<f32> {
+    let tube = 1.0 - 0.45 * in.across * in.across;
+    let shade = select(tube, 1.0, object.params.y > 0.5);
+    let c = mix(object.color.rgb, vec3<f32>(1.0, 0.98, 0.95), in.whiten * 0.85);
+    return output(c * shade, object.color.a);
+}
+
+// The overlay (cut marks as round dots, the cut path), drawn without a depth test.
+@fragment
+fn fs_overlay(in: VsOut) -> @location(0) vec4<f32> {
     if object.params.x > 0.5 && in.across * in.across + in.along * in.along > 1.0 {
         discard;
     }
-    let shade = 1.0 - 0.45 * in.across * in.across;
-    let c = mix(object.color.rgb, vec3<f32>(1.0, 0.98, 0.95), in.whiten * 0.85);
-    return output(c * shade, object.color.a);
+    return line_color(in);
 }

@@ -1,10 +1,16 @@
 // Lit triangle meshes. Both sides of a sheet are drawn (cull none); the normal is turned towards the
 // viewer, and the side facing away from the given normal (the inner side of a layer) is shaded darker.
 //
-// `fs_tissue` (layers): the procedural texture (group 2) in the surface's rest coordinates, a wrapped
-// diffuse with a reddish tint where light grazes (light scattered under the surface), a sharp wet
-// highlight over a broad sheen, the instruments' soft shadows from the overhead lamp, and the
-// exercise's regions drawn on the surface. `fs_solid` (instruments, cut edges): plain or polished steel.
+// Tissue (layers): `vs_tissue` lights each vertex: a wrapped diffuse from the overhead lamp and the
+// headlight, a reddish tint where light grazes (light scattered under the surface), a broad sheen, a
+// Fresnel rim, the instruments' soft shadows from the lamp, and the cosine of the wet highlight.
+// `fs_tissue` adds per pixel what is finer than the vertices: the layer's pattern (group 2, in the
+// surface's rest coordinates), the highlight's sharp power-64 falloff and the exercise's regions.
+// Why per vertex: a software rasteriser pays for every operation of the fragment shader at every
+// pixel, two or three times over along the edges of small triangles (it shades 4 × 4 blocks), while
+// the sheets are smooth at their vertex spacing; the golden images of the dissection differ from
+// per-pixel lighting in under 0.1 % of pixels. `fs_solid` (instruments, cut edges): plain or polished
+// steel, lit per pixel.
 // Everything stays within WebGL2: uniforms, one 2D texture, no storage buffers.
 
 @group(2) @binding(0) var tissue_texture: texture_2d<f32>;
@@ -14,10 +20,21 @@ struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
-    @location(2) uv: vec2<f32>,
+};
+
+struct TissueOut {
+    @builtin(position) clip: vec4<f32>,
+    // Surface coordinates (fractions of the surface's rest extent).
+    @location(0) uv: vec2<f32>,
     // Signed distances (surface fractions) to the nearest target and forbidden region's edge, negative
     // inside; large when there is none. Interpolated: exact along straight edges, rounded at corners.
-    @location(3) region: vec2<f32>,
+    @location(1) region: vec2<f32>,
+    // What multiplies the layer's colour: ambient, both diffuse terms (the lamp's past the shadows),
+    // the subsurface tint, and the inner side's darkening.
+    @location(2) light: vec3<f32>,
+    // x: the broad sheen, y: the Fresnel rim (both added), z: the lamp's light past the shadows, w: the
+    // cosine between the normal and the lamp's half vector (the highlight's).
+    @location(3) gloss: vec4<f32>,
 };
 
 // Signed distances from uv to the nearest target and forbidden region's edge (negative inside; 10
@@ -61,13 +78,35 @@ fn vs_tissue(
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
-) -> VsOut {
-    var out: VsOut;
-    out.world = position;
-    out.normal = normal;
-    out.uv = uv;
+) -> TissueOut {
+    var out: TissueOut;
     out.clip = camera.view_proj * vec4<f32>(position, 1.0);
+    out.uv = uv;
     out.region = region_distances(uv);
+    let v = normalize(camera.eye.xyz - position);
+    var n = normalize(normal);
+    let nv = dot(n, v);
+    n = select(n, -n, nv < 0.0);
+    let lamp = camera.lamp.xyz;
+    let head = camera.light.xyz;
+    let shade = shadow(position);
+    // Wrapped diffuse: light bleeds a little past the terminator, as under a thin wet membrane.
+    let d_lamp = clamp(dot(n, lamp) * 0.74 + 0.26, 0.0, 1.0);
+    let nh = dot(n, head);
+    let d_head = clamp(nh * 0.74 + 0.26, 0.0, 1.0);
+    // Subsurface tint: light scattered inside comes out redder, most where it grazes the surface.
+    let graze = 1.0 - abs(nh);
+    let sss = vec3<f32>(0.9, 0.25, 0.18) * (0.1 + 0.16 * graze * graze);
+    // The inner side of a layer is darker.
+    let side = select(1.0, 0.72, nv < 0.0);
+    out.light = (vec3<f32>(0.16 + 0.62 * d_lamp * shade + 0.34 * d_head) + sss) * side;
+    // Wet: a broad sheen (power 16), a Fresnel rim, and the tight highlight's cosine (its power is
+    // taken per pixel, so the highlight keeps its sharp edge between vertices).
+    let c = 1.0 - abs(nv);
+    let c2 = c * c;
+    let fres = 0.04 + 0.96 * c2 * c2 * c;
+    let hl = max(dot(n, normalize(lamp + v)), 0.0);
+    out.gloss = vec4<f32>(0.1 * pow16(max(nh, 0.0)), 0.12 * fres, shade, hl);
     return out;
 }
 
@@ -77,8 +116,6 @@ fn vs_solid(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) ->
     let world = object.model * vec4<f32>(position, 1.0);
     out.world = world.xyz;
     out.normal = (object.model * vec4<f32>(normal, 0.0)).xyz;
-    out.uv = vec2<f32>(0.0);
-    out.region = vec2<f32>(10.0);
     out.clip = camera.view_proj * world;
     return out;
 }
@@ -101,25 +138,17 @@ fn capsule_light(p: vec3<f32>, l: vec3<f32>, a: vec4<f32>, b: vec4<f32>) -> f32 
     return select(1.0, lit, t > 0.0 && b.w > 0.5);
 }
 
+// The lamp's light at `p` past both casters (an unused caster lets all light through). Branch-free,
+// like `region_distances`: lavapipe runs a vertex shader's branches at a high cost (with an `if` on
+// the casters here the frame cost about as much as with the shadow computed at every pixel).
 fn shadow(p: vec3<f32>) -> f32 {
-    if camera.lamp.w <= 0.0 || camera.casters[1].w < 0.5 {
-        return 1.0;
-    }
     let l = camera.lamp.xyz;
-    var lit = capsule_light(p, l, camera.casters[0], camera.casters[1]);
-    if camera.casters[3].w > 0.5 {
-        lit = lit * capsule_light(p, l, camera.casters[2], camera.casters[3]);
-    }
-    return mix(1.0, lit, camera.lamp.w);
+    let lit = capsule_light(p, l, camera.casters[0], camera.casters[1])
+        * capsule_light(p, l, camera.casters[2], camera.casters[3]);
+    return mix(1.0, lit, max(camera.lamp.w, 0.0));
 }
 
-// An outline about two pixels wide along the zero of a signed distance, from its screen derivative.
-fn outline(d: f32) -> f32 {
-    let px = abs(d) / max(fwidth(d), 1e-9);
-    return clamp(2.5 - px, 0.0, 1.0);
-}
-
-// x to the powers 16 and 64, by squaring (cheaper than pow on a software rasteriser).
+// x to the power 16, by squaring (cheaper than pow on a software rasteriser).
 fn pow16(x: f32) -> f32 {
     let x2 = x * x;
     let x4 = x2 * x2;
@@ -127,85 +156,33 @@ fn pow16(x: f32) -> f32 {
     return x8 * x8;
 }
 
-// Distance (surface fractions) from p to the segment a-b. Branch-free.
-fn segment_distance(p: vec2<f32>, a: vec2<f32>, b: vec2<f32>) -> f32 {
-    let ab = b - a;
-    let t = clamp(dot(p - a, ab) / max(dot(ab, ab), 1e-12), 0.0, 1.0);
-    return length(p - a - t * ab);
-}
-
-// Distance from uv to the planned incision (five segments through six points; see `Camera`).
-fn incision_distance(uv: vec2<f32>) -> f32 {
-    let p0 = camera.incision[0].xy;
-    let p1 = camera.incision[0].zw;
-    let p2 = camera.incision[1].xy;
-    let p3 = camera.incision[1].zw;
-    let p4 = camera.incision[2].xy;
-    let p5 = camera.incision[2].zw;
-    let a = min(segment_distance(uv, p0, p1), segment_distance(uv, p1, p2));
-    let b = min(segment_distance(uv, p2, p3), segment_distance(uv, p3, p4));
-    return min(min(a, b), segment_distance(uv, p4, p5));
-}
-
 @fragment
-fn fs_tissue(in: VsOut) -> @location(0) vec4<f32> {
-    let v = normalize(camera.eye.xyz - in.world);
-    var n = normalize(in.normal);
-    let nv = dot(n, v);
-    n = select(n, -n, nv < 0.0);
-
-    // Texture: grain (r), vessels (g), capillaries (b), mottle (a).
+fn fs_tissue(in: TissueOut) -> @location(0) vec4<f32> {
+    // The layer's pattern (see `render::texture`): r the colour's factor over 1.2, g the weight of the
+    // pattern's vessel colour (object.detail), b the extra wetness over vessels.
     let tex = textureSample(tissue_texture, tissue_sampler, in.uv * object.extra.xy);
-    let pattern = object.params.z;
-    var base = object.color.rgb * (0.9 + 0.2 * tex.a);
-    var wet = 1.0;
-    if pattern < 0.5 {
-        // Dura: fine collagen grain, and the meningeal vessels faint through it.
-        base = base * (0.9 + 0.16 * tex.r);
-        base = mix(base, vec3<f32>(0.55, 0.12, 0.12), tex.g * 0.18);
-    } else if pattern < 1.5 {
-        // Arachnoid: red vessels on a translucent pink film, capillaries fainter.
-        let vessel = max(tex.g, 0.45 * tex.b);
-        base = mix(base, vec3<f32>(0.42, 0.03, 0.05), vessel * 0.85);
-        wet = 1.0 + 0.5 * tex.g;
+    let base = object.color.rgb * (tex.r * 1.2) + object.detail.rgb * tex.g;
+    let wet = 1.0 + 0.5 * tex.b;
+    // Wet: the tight lamp highlight (power 64), dimmed in the instruments' shadows.
+    let h16 = pow16(in.gloss.w);
+    let tight = h16 * h16 * h16 * h16 * in.gloss.z;
+    let spec = object.params.x * wet * (tight * 0.8 + in.gloss.x) + in.gloss.y;
+    var lit = base * in.light + vec3<f32>(spec);
+
+    // Regions: a tint inside and an outline about two pixels wide (from the distance's screen
+    // derivative); the forbidden one hatched. Regions do not overlap, so a pixel takes the nearer one's
+    // (the distance to their union is continuous, so its derivative is sound). Pixels away from every
+    // region skip the rest: the rasteriser skips a branch no pixel of its block takes.
+    let d = min(in.region.x, in.region.y);
+    let px = max(fwidth(d), 1e-9);
+    if d < 2.5 * px {
+        let forbidden = in.region.y < in.region.x;
+        let stripe = step(0.5, fract((in.uv.x + in.uv.y) * 60.0));
+        let tint = select(0.1, 0.12 + 0.16 * stripe, forbidden) * step(d, 0.0);
+        let edge = clamp(2.5 - abs(d) / px, 0.0, 1.0) * 0.85;
+        lit = mix(lit, select(vec3<f32>(0.35, 0.9, 0.55), vec3<f32>(0.55, 0.05, 0.6), forbidden), tint);
+        lit = mix(lit, select(vec3<f32>(0.2, 0.95, 0.5), vec3<f32>(0.85, 0.2, 0.95), forbidden), edge);
     }
-    base = base * select(1.0, 0.72, nv < 0.0);
-
-    let shade = shadow(in.world);
-    let lamp = camera.lamp.xyz;
-    let head = camera.light.xyz;
-    // Wrapped diffuse: light bleeds a little past the terminator, as under a thin wet membrane.
-    let d_lamp = clamp(dot(n, lamp) * 0.74 + 0.26, 0.0, 1.0);
-    let nh = dot(n, head);
-    let d_head = clamp(nh * 0.74 + 0.26, 0.0, 1.0);
-    // Subsurface tint: light scattered inside comes out redder, most where it grazes the surface.
-    let graze = 1.0 - abs(nh);
-    let sss = vec3<f32>(0.9, 0.25, 0.18) * (0.1 + 0.16 * graze * graze);
-    // Wet: a tight lamp highlight (power 64) over a broad sheen (power 16), and a Fresnel rim.
-    let c = 1.0 - abs(nv);
-    let c2 = c * c;
-    let fres = 0.04 + 0.96 * c2 * c2 * c;
-    let hl = max(dot(n, normalize(lamp + v)), 0.0);
-    let h16 = pow16(hl);
-    let tight = h16 * h16 * h16 * h16 * shade;
-    let sheen = pow16(max(nh, 0.0));
-    let spec = object.params.x * wet * (tight * 0.8 + sheen * 0.1) + 0.12 * fres;
-
-    var lit = base * (0.16 + 0.62 * d_lamp * shade + 0.34 * d_head + sss) + vec3<f32>(spec);
-
-    // Regions: a tint inside and an outline; the forbidden one hatched.
-    let inside = step(in.region, vec2<f32>(0.0));
-    let stripe = step(0.5, fract((in.uv.x + in.uv.y) * 60.0));
-    lit = mix(lit, vec3<f32>(0.35, 0.9, 0.55), inside.x * 0.1);
-    lit = mix(lit, vec3<f32>(0.55, 0.05, 0.6), inside.y * (0.12 + 0.16 * stripe));
-    lit = mix(lit, vec3<f32>(0.2, 0.95, 0.5), outline(in.region.x) * 0.85);
-    lit = mix(lit, vec3<f32>(0.85, 0.2, 0.95), outline(in.region.y) * 0.85);
-    // The planned incision, dashed in a surgeon's violet marker on the upper layer (its outer side).
-    let cut_d = incision_distance(in.uv);
-    let cut_px = cut_d / max(fwidth(cut_d), 1e-9);
-    let dash = step(0.45, fract((in.uv.x + in.uv.y) * 45.0));
-    let marker = (1.0 - smoothstep(1.2, 2.4, cut_px)) * dash * object.params.w * select(1.0, 0.0, nv < 0.0);
-    lit = mix(lit, vec3<f32>(0.28, 0.12, 0.55), marker * 0.9);
     return output(lit, 1.0);
 }
 

@@ -1,14 +1,15 @@
 //! Guards the headless renderer end to end on a real adapter (lavapipe in CI): a synthetic two-layer
 //! scene, intact and cut, must match the golden images `tests/golden/two_layers{,_cut}.png` within a
 //! tolerance; cutting a band out of the upper layer must change the picture there and nowhere far from
-//! it; fibres must show between the layers; each instrument must be drawn at its pose.
+//! it; fibres must show between the layers; each instrument must be drawn at its pose; the planned
+//! incision is marked along all of its points.
 //!
 //! Regenerate the golden with `DISSECT_BLESS=1 cargo test --test render_headless`, then look at it.
 //! Renders of each run are written to `target/render-test/` for inspection.
 
 use std::path::PathBuf;
 
-use dissect::render::{self, Gpu, OrbitCamera, demo};
+use dissect::render::{self, Gpu, Offscreen, OrbitCamera, SceneRenderer, Style, demo};
 use dissect::simulation::{CameraSpec, Snapshot};
 use glam::{Vec2, Vec3};
 
@@ -307,4 +308,51 @@ fn render_in_draws_only_inside_its_rect() {
     let right_black = image.enumerate_pixels().filter(|(x, _, p)| *x >= half && black(p)).count();
     assert_eq!(left_drawn, 0, "pixels drawn outside the rect");
     assert_eq!(right_black, 0, "pixels inside the rect left uncovered");
+}
+
+/// The planned incision's violet marker: blue well above green (the tissue is tan, pink or grey).
+fn marker_like(p: &image::Rgba<u8>) -> bool {
+    let [r, g, b, _] = p.0.map(i32::from);
+    b > g + 40 && r > g && b > 70
+}
+
+#[test]
+fn the_planned_incision_is_drawn_through_all_its_points() {
+    let gpu = gpu();
+    let mut snap = scene();
+    snap.regions.clear();
+    snap.instrument = None;
+    // A zigzag of nine points (eight segments) across the upper sheet; the renderer once drew only
+    // the first six points.
+    snap.incision =
+        (0..9).map(|k| [0.15 + 0.0875 * k as f32, if k % 2 == 0 { 0.35 } else { 0.65 }]).collect();
+    let image = render::render_to_image(&gpu, &snap, &camera(), WIDTH, HEIGHT).expect("render");
+    render::save_png(&image, out_dir().join("incision_nine_points.png")).expect("save");
+    let viewport = Vec2::new(WIDTH as f32, HEIGHT as f32);
+    let on_sheet = |uv: [f32; 2]| {
+        let (x, z) = (demo::EXTENT * (uv[0] - 0.5), demo::EXTENT * (uv[1] - 0.5));
+        Vec3::new(x, demo::sheet_height(x, z, 1.0), z)
+    };
+    // Every segment shows marker pixels near its middle (its dashes are a period of 1/45 apart).
+    for (k, w) in snap.incision.windows(2).enumerate() {
+        let mid = [(w[0][0] + w[1][0]) / 2.0, (w[0][1] + w[1][1]) / 2.0];
+        let (px, _) = camera().project(on_sheet(mid), viewport).expect("segment in view");
+        let near = image
+            .enumerate_pixels()
+            .filter(|(x, y, p)| Vec2::new(*x as f32, *y as f32).distance(px) < 12.0 && marker_like(p))
+            .count();
+        assert!(near >= 4, "segment {k} of the incision: {near} marker pixels near its middle");
+    }
+    // Hidden with the regions (G), and nowhere far from the line.
+    let plain = Style { show_regions: false, ..Style::default() };
+    let mut renderer = SceneRenderer::new(&gpu, render::OFFSCREEN_FORMAT, plain);
+    renderer.update(&gpu, &snap).expect("update");
+    let offscreen = Offscreen::new(&gpu, &renderer, WIDTH, HEIGHT).expect("target");
+    offscreen.render(&gpu, &renderer, &camera());
+    let hidden = offscreen.read(&gpu).expect("read");
+    assert_eq!(
+        hidden.pixels().filter(|p| marker_like(p)).count(),
+        0,
+        "the marker shows with the regions off"
+    );
 }

@@ -1,6 +1,7 @@
 //! The scene pipelines and the GPU copies of a snapshot: layers (textured, with their cut edges as
 //! walls of the layer's thickness), fibres, broken-fibre stubs and cut marks, instruments (the one in
-//! hand and forceps left clamped), the instruments' shadows, the exercise's regions, the cut path.
+//! hand and forceps left clamped), the instruments' shadows, the exercise's regions and planned
+//! incision, the cut path.
 //!
 //! [`SceneRenderer::update`] uploads a [`Snapshot`] into buffers it keeps between frames (positions and
 //! normals every frame with `write_buffer`; index buffers, surface coordinates and open edges only when
@@ -14,9 +15,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use super::camera::OrbitCamera;
-use super::geometry::{self, LineInstance};
+use super::geometry::{self, LineInstance, SurfacePiece};
 use super::mesh::{self, Part};
-use super::texture::{TEXTURE_SIZE, TEXTURE_TILE_M, tissue_texels};
+use super::texture::{TEXTURE_SIZE, TEXTURE_TILE_M, pattern_texels, tissue_texels, vessel_color};
 use super::{Gpu, RenderError};
 use crate::snapshot::{InstrumentKind, InstrumentPose, RegionKind, RegionShape, Snapshot, SurfacePattern};
 
@@ -51,7 +52,11 @@ pub struct Style {
     pub mark_color: [f32; 3],
     /// Mark diameter in pixels at a 800-pixel-tall view.
     pub mark_width_px: f32,
-    /// Draw the exercise's target and forbidden regions on the tissue.
+    /// The planned incision's dashed marker line on the upper layer.
+    pub incision_color: [f32; 3],
+    /// Marker line width in pixels at a 800-pixel-tall view.
+    pub incision_width_px: f32,
+    /// Draw the exercise's target and forbidden regions and its planned incision on the tissue.
     pub show_regions: bool,
     /// Draw the instruments' shadows.
     pub shadows: bool,
@@ -70,6 +75,8 @@ impl Default for Style {
             handle_color: [0.5, 0.53, 0.58],
             mark_color: [1.0, 0.78, 0.1],
             mark_width_px: 4.5,
+            incision_color: [0.3, 0.13, 0.55],
+            incision_width_px: 3.5,
             show_regions: true,
             shadows: true,
             show_fibres: true,
@@ -102,14 +109,16 @@ struct SceneUniform {
     casters: [[f32; 4]; 4],
     regions: [[f32; 4]; 4],
     region_kinds: [f32; 4],
-    /// The planned incision's first [`INCISION_POINTS`] points, two `(u, v)` per vector.
-    incision: [[f32; 4]; 3],
 }
 
-/// Points of the planned incision drawn (five segments; the U-shaped incisions have three).
-const INCISION_POINTS: usize = 6;
-/// Where unused incision points go (surface fractions): far off the surface, so they draw nothing.
-const NO_POINT: f32 = 100.0;
+/// The planned incision's dashes: one every this many surface fractions along the line, drawn for
+/// the last [`INCISION_DUTY`] of each.
+const INCISION_PERIOD: f32 = 1.0 / 45.0;
+const INCISION_DUTY: f32 = 0.55;
+/// How far above the upper layer's surface (along its normal, metres) the incision's marker is drawn,
+/// so that the depth test keeps it on the surface's outer side, also where the quad of the line tilts
+/// away from the surface.
+const INCISION_LIFT_M: f32 = 0.0002;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -118,6 +127,7 @@ struct ObjectUniform {
     color: [f32; 4],
     params: [f32; 4],
     extra: [f32; 4],
+    detail: [f32; 4],
 }
 
 const OBJECT_SIZE: u64 = std::mem::size_of::<ObjectUniform>() as u64;
@@ -197,6 +207,8 @@ struct LayerGpu {
     wall_positions: GrowBuffer,
     wall_normals: GrowBuffer,
     wall_vertex_count: u32,
+    /// Which of the renderer's pattern textures the layer is drawn with.
+    pattern: usize,
 }
 
 #[derive(Debug)]
@@ -252,7 +264,8 @@ pub struct SceneRenderer {
     object_bind_group: wgpu::BindGroup,
     object_stride: u64,
     object_scratch: Vec<u8>,
-    texture_bind_group: wgpu::BindGroup,
+    /// One per [`SurfacePattern`], in [`pattern_index`] order.
+    texture_bind_groups: [wgpu::BindGroup; 3],
     layers: Vec<LayerGpu>,
     parts: Vec<PartGpu>,
     instrument: [Option<Part>; MAX_PARTS],
@@ -260,6 +273,12 @@ pub struct SceneRenderer {
     stubs: LinesGpu,
     marks: LinesGpu,
     cut: LinesGpu,
+    /// The planned incision's dashes, its pieces over the upper layer's triangles, and what they were
+    /// found for (the layer's topology version, vertex and triangle counts, and the line).
+    marker: LinesGpu,
+    incision_pieces: Vec<SurfacePiece>,
+    incision_key: Option<(u64, usize, usize)>,
+    incision_line: Vec<[f32; 2]>,
     edge_scratch: Vec<(u64, u32)>,
     wall_scratch: (Vec<[f32; 3]>, Vec<[f32; 3]>),
     scene: SceneUniform,
@@ -354,6 +373,15 @@ fn caster(pose: &InstrumentPose) -> [[f32; 4]; 2] {
 /// The colour of a layer's cut edge: the layer's colour, darker and redder (raw, moist tissue).
 fn wall_color(c: [f32; 4]) -> [f32; 4] {
     [c[0] * 0.8, c[1] * 0.45, c[2] * 0.42, 1.0]
+}
+
+/// Index of a pattern's texture in [`SceneRenderer`]'s bind groups.
+fn pattern_index(pattern: SurfacePattern) -> usize {
+    match pattern {
+        SurfacePattern::Grain => 0,
+        SurfacePattern::Vessels => 1,
+        SurfacePattern::Plain => 2,
+    }
 }
 
 impl SceneRenderer {
@@ -539,7 +567,7 @@ impl SceneRenderer {
             "lines overlay",
             &line_layout,
             &lines_module,
-            ("vs_main", "fs_main"),
+            ("vs_main", "fs_overlay"),
             &line_buffers,
             depth(false, wgpu::CompareFunction::Always),
             &blended,
@@ -559,7 +587,9 @@ impl SceneRenderer {
             OBJECT_SIZE.next_multiple_of(u64::from(device.limits().min_uniform_buffer_offset_alignment));
         let objects = GrowBuffer::new(device, "objects", wgpu::BufferUsages::UNIFORM, object_stride * 16);
         let object_bind_group = Self::object_bind_group(device, &object_layout, &objects.buffer);
-        let texture_bind_group = Self::tissue_texture(gpu, &texture_layout);
+        let texels = tissue_texels();
+        let texture_bind_groups = [SurfacePattern::Grain, SurfacePattern::Vessels, SurfacePattern::Plain]
+            .map(|pattern| Self::tissue_texture(gpu, &texture_layout, &pattern_texels(&texels, pattern)));
 
         let parts = Part::ALL
             .iter()
@@ -606,7 +636,7 @@ impl SceneRenderer {
             object_bind_group,
             object_stride,
             object_scratch: Vec::new(),
-            texture_bind_group,
+            texture_bind_groups,
             layers: Vec::new(),
             parts,
             instrument: [None; MAX_PARTS],
@@ -614,6 +644,10 @@ impl SceneRenderer {
             stubs: LinesGpu::new(device, "fibre stubs"),
             marks: LinesGpu::new(device, "cut marks"),
             cut: LinesGpu::new(device, "cut path"),
+            marker: LinesGpu::new(device, "planned incision"),
+            incision_pieces: Vec::new(),
+            incision_key: None,
+            incision_line: Vec::new(),
             edge_scratch: Vec::new(),
             wall_scratch: (Vec::new(), Vec::new()),
             scene: SceneUniform::default(),
@@ -621,8 +655,8 @@ impl SceneRenderer {
         }
     }
 
-    /// The procedural tissue texture (made once on the CPU) and its repeating, filtering sampler.
-    fn tissue_texture(gpu: &Gpu, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
+    /// A pattern's texture (made once on the CPU, see [`pattern_texels`]) and its repeating sampler.
+    fn tissue_texture(gpu: &Gpu, layout: &wgpu::BindGroupLayout, texels: &[[u8; 4]]) -> wgpu::BindGroup {
         let size = wgpu::Extent3d { width: TEXTURE_SIZE, height: TEXTURE_SIZE, depth_or_array_layers: 1 };
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("tissue texture"),
@@ -634,7 +668,6 @@ impl SceneRenderer {
             usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         });
-        let texels = tissue_texels();
         gpu.queue.write_texture(
             wgpu::TexelCopyTextureInfo {
                 texture: &texture,
@@ -642,7 +675,7 @@ impl SceneRenderer {
                 origin: wgpu::Origin3d::ZERO,
                 aspect: wgpu::TextureAspect::All,
             },
-            bytemuck::cast_slice(&texels),
+            bytemuck::cast_slice(texels),
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(TEXTURE_SIZE * 4),
@@ -770,6 +803,7 @@ impl SceneRenderer {
                 wall_positions: GrowBuffer::new(device, "wall positions", vertex, 12 * 6 * 64),
                 wall_normals: GrowBuffer::new(device, "wall normals", vertex, 12 * 6 * 64),
                 wall_vertex_count: 0,
+                pattern: 0,
             });
         }
         for (i, (layer, gpu_layer)) in snapshot.layers.iter().zip(self.layers.iter_mut()).enumerate() {
@@ -819,6 +853,7 @@ impl SceneRenderer {
             grown += u64::from(gpu_layer.positions.write(gpu, bytemuck::cast_slice(&layer.positions)));
             grown += u64::from(gpu_layer.normals.write(gpu, bytemuck::cast_slice(&layer.normals)));
             gpu_layer.vertex_count = vertex_count;
+            gpu_layer.pattern = pattern_index(layer.pattern);
             // Cut edges: walls down into the layer's thickness (the outer layer's inside is against
             // its normal, a deeper layer's along it, away from the layer above).
             let depth = if i == 0 { -layer.thickness } else { layer.thickness };
@@ -846,7 +881,29 @@ impl SceneRenderer {
         self.cut.scratch.extend(
             snapshot.cut_path.windows(2).map(|w| [w[0][0], w[0][1], w[0][2], w[1][0], w[1][1], w[1][2], 1.0]),
         );
-        for lines in [&mut self.fibres, &mut self.stubs, &mut self.marks, &mut self.cut] {
+        // The planned incision on the upper layer: clipped to its triangles when its topology or the line
+        // changes, placed on the deformed surface every frame. All of its points, however many.
+        self.marker.scratch.clear();
+        if let Some(upper) = snapshot.layers.first()
+            && self.style.show_regions
+            && snapshot.incision.len() >= 2
+        {
+            let key = Some((upper.topology_version, upper.positions.len(), upper.triangles.len()));
+            if self.incision_key != key || self.incision_line != snapshot.incision {
+                geometry::surface_pieces(upper, &snapshot.incision, &mut self.incision_pieces);
+                self.incision_key = key;
+                self.incision_line.clone_from(&snapshot.incision);
+            }
+            geometry::dashed_instances(
+                upper,
+                &self.incision_pieces,
+                INCISION_PERIOD,
+                INCISION_DUTY,
+                INCISION_LIFT_M,
+                &mut self.marker.scratch,
+            );
+        }
+        for lines in [&mut self.fibres, &mut self.stubs, &mut self.marks, &mut self.cut, &mut self.marker] {
             grown += u64::from(lines.upload(gpu));
         }
 
@@ -863,17 +920,6 @@ impl SceneRenderer {
             scene.casters[2 * k] = a;
             scene.casters[2 * k + 1] = b;
         }
-        // The incision: unused points repeat the last one (zero-length segments) or, with no line,
-        // lie far off the surface.
-        let mut points = [[NO_POINT; 2]; INCISION_POINTS];
-        if self.style.show_regions && snapshot.incision.len() >= 2 {
-            for (k, p) in points.iter_mut().enumerate() {
-                *p = snapshot.incision[k.min(snapshot.incision.len() - 1)];
-            }
-        }
-        for (k, pair) in points.chunks_exact(2).enumerate() {
-            scene.incision[k] = [pair[0][0], pair[0][1], pair[1][0], pair[1][1]];
-        }
         if self.style.show_regions {
             for (k, region) in snapshot.regions.iter().take(4).enumerate() {
                 let forbidden = region.kind == RegionKind::Forbidden;
@@ -888,9 +934,9 @@ impl SceneRenderer {
         self.scene = scene;
 
         // Object uniforms: a slot per layer, one per layer's walls, then the instrument parts, fibres,
-        // stubs, marks and cut path.
+        // stubs, marks, cut path and the planned incision.
         let n = snapshot.layers.len();
-        let slots = 2 * n + MAX_PARTS + 4;
+        let slots = 2 * n + MAX_PARTS + 5;
         let stride = self.object_stride as usize;
         let mut scratch = std::mem::take(&mut self.object_scratch);
         scratch.clear();
@@ -900,20 +946,15 @@ impl SceneRenderer {
                 .copy_from_slice(bytemuck::bytes_of(&object));
         };
         for (i, layer) in snapshot.layers.iter().enumerate() {
-            let pattern = match layer.pattern {
-                SurfacePattern::Grain => 0.0,
-                SurfacePattern::Vessels => 1.0,
-                SurfacePattern::Plain => 2.0,
-            };
             let repeats = layer.uv_size.map(|s| s / TEXTURE_TILE_M);
             put(
                 i,
                 ObjectUniform {
                     model: mat(Mat4::IDENTITY),
                     color: layer.color,
-                    // w: 1 on the upper layer, which the planned incision is drawn on.
-                    params: [0.35, 0.0, pattern, if i == 0 { 1.0 } else { 0.0 }],
+                    params: [0.35, 0.0, 0.0, 0.0],
                     extra: [repeats[0], repeats[1], 0.0, 0.0],
+                    detail: Vec3::from(vessel_color(layer.pattern)).extend(0.0).into(),
                 },
             );
             put(
@@ -923,6 +964,7 @@ impl SceneRenderer {
                     color: wall_color(layer.color),
                     params: [0.3, 40.0, 0.0, 0.0],
                     extra: [0.0; 4],
+                    detail: [0.0; 4],
                 },
             );
         }
@@ -944,22 +986,27 @@ impl SceneRenderer {
                         color: Vec3::from(color).extend(1.0).into(),
                         params: [0.8, 60.0, steel, 0.0],
                         extra: [0.0; 4],
+                        detail: [0.0; 4],
                     },
                 );
                 self.instrument[2 * h + k] = Some(part);
             }
         }
-        let line = |color: [f32; 3], alpha: f32, width: f32, dots: bool, tear: f32| ObjectUniform {
-            model: mat(Mat4::IDENTITY),
-            color: Vec3::from(color).extend(alpha).into(),
-            params: [if dots { 1.0 } else { 0.0 }, 0.0, width, tear],
-            extra: [0.0; 4],
-        };
+        let line =
+            |color: [f32; 3], alpha: f32, width: f32, dots: bool, flat: bool, tear: f32| ObjectUniform {
+                model: mat(Mat4::IDENTITY),
+                color: Vec3::from(color).extend(alpha).into(),
+                params: [f32::from(u8::from(dots)), f32::from(u8::from(flat)), width, tear],
+                extra: [0.0; 4],
+                detail: [0.0; 4],
+            };
+        let style = &self.style;
         let base = 2 * n + MAX_PARTS;
-        put(base, line(self.style.fibre_color, 1.0, self.style.fibre_width_px, false, tear));
-        put(base + 1, line(self.style.fibre_color, 1.0, self.style.fibre_width_px, false, tear));
-        put(base + 2, line(self.style.mark_color, 0.85, self.style.mark_width_px, true, 0.0));
-        put(base + 3, line(self.style.cut_color, 1.0, self.style.cut_width_px, false, 0.0));
+        put(base, line(style.fibre_color, 1.0, style.fibre_width_px, false, false, tear));
+        put(base + 1, line(style.fibre_color, 1.0, style.fibre_width_px, false, false, tear));
+        put(base + 2, line(style.mark_color, 0.85, style.mark_width_px, true, false, 0.0));
+        put(base + 3, line(style.cut_color, 1.0, style.cut_width_px, false, false, 0.0));
+        put(base + 4, line(style.incision_color, 1.0, style.incision_width_px, false, true, 0.0));
         let grew = self.objects.write(gpu, &scratch);
         self.object_scratch = scratch;
         self.stats.reallocations += grown + u64::from(grew);
@@ -1046,7 +1093,8 @@ impl SceneRenderer {
         });
         pass.set_viewport(x, y, w, h, 0.0, 1.0);
         pass.set_bind_group(0, &view.camera_bind_group, &[]);
-        pass.set_bind_group(2, &self.texture_bind_group, &[]);
+        // Group 2 must be set for the mesh layout even with no layer; each layer sets its pattern's.
+        pass.set_bind_group(2, &self.texture_bind_groups[0], &[]);
 
         let n = self.layers.len();
         let offset = |slot: usize| (slot as u64 * self.object_stride) as u32;
@@ -1056,6 +1104,9 @@ impl SceneRenderer {
                 continue;
             }
             pass.set_bind_group(1, &self.object_bind_group, &[offset(i)]);
+            if let Some(texture) = self.texture_bind_groups.get(layer.pattern) {
+                pass.set_bind_group(2, texture, &[]);
+            }
             pass.set_vertex_buffer(0, layer.positions.buffer.slice(..u64::from(layer.vertex_count) * 12));
             pass.set_vertex_buffer(1, layer.normals.buffer.slice(..u64::from(layer.vertex_count) * 12));
             pass.set_vertex_buffer(2, layer.uv.buffer.slice(..u64::from(layer.vertex_count) * 8));
@@ -1098,6 +1149,7 @@ impl SceneRenderer {
         pass.set_pipeline(&self.line_pipeline);
         draw_lines(&mut pass, &self.fibres, base);
         draw_lines(&mut pass, &self.stubs, base + 1);
+        draw_lines(&mut pass, &self.marker, base + 4);
         // The background last, depth-tested at the far plane, so covered pixels cost nothing (a software
         // rasteriser pays for every shaded fragment).
         pass.set_pipeline(&self.background_pipeline);

@@ -8,6 +8,13 @@
 //!
 //! Drawn in the surface's rest coordinates, so the pattern moves and stretches with the tissue.
 //! Sampling a texture costs a software rasteriser far less per pixel than evaluating noise in the shader.
+//!
+//! Each [`SurfacePattern`] gets its own texture made from those channels ([`pattern_texels`]), holding
+//! what the tissue shader needs per pixel and nothing to compute: r the factor of the layer's colour
+//! (over [`ALBEDO_SCALE`]), g the weight of the pattern's vessel colour ([`vessel_color`]), b the
+//! extra wetness over vessels (the highlight is `1 + 0.5 b` times as strong).
+
+use crate::snapshot::SurfacePattern;
 
 /// Side of the texture, texels.
 pub const TEXTURE_SIZE: u32 = 256;
@@ -86,6 +93,49 @@ pub fn tissue_texels() -> Vec<[u8; 4]> {
     out
 }
 
+/// The layer colour's factor is stored divided by this (it reaches about 1.17 on the dura's grain).
+pub const ALBEDO_SCALE: f32 = 1.2;
+
+/// The colour (linear RGB) a pattern's vessels mix the layer's colour towards.
+pub fn vessel_color(pattern: SurfacePattern) -> [f32; 3] {
+    match pattern {
+        // The meningeal vessels, faint through the dura.
+        SurfacePattern::Grain => [0.55, 0.12, 0.12],
+        // Red vessels on the arachnoid's translucent pink film.
+        SurfacePattern::Vessels => [0.42, 0.03, 0.05],
+        SurfacePattern::Plain => [0.0; 3],
+    }
+}
+
+/// One pattern's texture (RGBA8, `TEXTURE_SIZE`² texels, row by row) from [`tissue_texels`]: for each
+/// texel the layer colour's factor `s`, the vessel weight `w` and the extra wetness `x`, so that the
+/// shader's colour is `colour × s + vessel_color × w`:
+/// - grain (dura): mottled collagen grain, the meningeal vessels faint through it (`w` = 0.18 of them);
+/// - vessels (arachnoid): vessels and fainter capillaries at 0.85 over the film, wetter on the vessels;
+/// - plain: the mottle only.
+pub fn pattern_texels(texels: &[[u8; 4]], pattern: SurfacePattern) -> Vec<[u8; 4]> {
+    let byte = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    texels
+        .iter()
+        .map(|t| {
+            let [grain, vessels, capillaries, mottle] = t.map(|c| f32::from(c) / 255.0);
+            let m = 0.9 + 0.2 * mottle;
+            let (s, w, wet) = match pattern {
+                SurfacePattern::Grain => {
+                    let w = 0.18 * vessels;
+                    (m * (0.9 + 0.16 * grain) * (1.0 - w), w, 0.0)
+                }
+                SurfacePattern::Vessels => {
+                    let w = 0.85 * vessels.max(0.45 * capillaries);
+                    (m * (1.0 - w), w, vessels)
+                }
+                SurfacePattern::Plain => (m, 0.0, 0.0),
+            };
+            [byte(s / ALBEDO_SCALE), byte(w), byte(wet), 255]
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -106,5 +156,21 @@ mod tests {
             let (lo, hi) = a.iter().fold((255u8, 0u8), |(lo, hi), t| (lo.min(t[c]), hi.max(t[c])));
             assert!(hi - lo > 60, "channel {c}: {lo}..{hi}");
         }
+    }
+
+    #[test]
+    fn pattern_textures_hold_the_colour_factor_without_clipping() {
+        let texels = tissue_texels();
+        for pattern in [SurfacePattern::Grain, SurfacePattern::Vessels, SurfacePattern::Plain] {
+            let p = pattern_texels(&texels, pattern);
+            assert_eq!(p.len(), texels.len());
+            // The factor is clipped at neither end of its byte.
+            let (lo, hi) = p.iter().fold((255u8, 0u8), |(lo, hi), t| (lo.min(t[0]), hi.max(t[0])));
+            assert!(hi < 255 && lo > 0, "{pattern:?}: colour factor bytes {lo}..{hi}");
+        }
+        // The arachnoid's vessels darken its film and make it wetter; the dura is never wetter.
+        let film = pattern_texels(&texels, SurfacePattern::Vessels);
+        assert!(film.iter().any(|t| t[1] > 150 && t[2] > 150));
+        assert!(pattern_texels(&texels, SurfacePattern::Grain).iter().all(|t| t[2] == 0));
     }
 }

@@ -14,7 +14,7 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("middle drag, shift + right drag", "pan the camera"),
     ("wheel", "zoom (when no instrument is held down)"),
     ("Home", "reset the cameras"),
-    ("G", "show or hide the target and forbidden regions on the tissue"),
+    ("G", "show or hide the target and forbidden regions and the planned incision on the tissue"),
     ("F5", "reload the scene (asks first once the session has started)"),
     ("Space", "replay: pause / play"),
     ("- / +", "replay: slower / faster (0.25× to 4×)"),
