@@ -1,15 +1,17 @@
 //! Window events both front ends translate alike, the desktop's windows and the browser's canvas
 //! (`web` compiles this file too, as it does `input.rs` and `window.rs`): the cursor and the buttons
-//! on a window's views, the wheel's zoom, the keys both offer, the views' captions. What follows from
-//! them for the hand and the session stays with each front end.
+//! on a window's views, the wheel's zoom, the keys both offer, the views' captions, and the actions
+//! both carry out alike (the hand's, the regions shown or hidden, the cameras reset). What follows
+//! for the session (reload, report, replay, tuning) stays with each front end.
 
 use glam::Vec2;
 use winit::event::{MouseButton, MouseScrollDelta};
 use winit::keyboard::{Key, NamedKey};
 
-use super::input;
+use super::input::{self, Hand};
 use super::window::ViewWindow;
-use crate::simulation::InstrumentKind;
+use crate::render::{OrbitCamera, SceneRenderer};
+use crate::simulation::{Command, InstrumentKind};
 use crate::tissue::CutDepth;
 use crate::ui::Action;
 
@@ -84,7 +86,8 @@ pub(crate) fn roll(key: &Key, roll_deg: f32) -> Option<Action> {
     Some(Action::SetRoll((roll_deg + d + 180.0).rem_euclid(360.0) - 180.0))
 }
 
-/// The keys both front ends offer: help, cameras, the report, the cutting depth, the instruments.
+/// The keys both front ends offer: help, cameras, the report, the regions, the cutting depth, the
+/// instruments.
 pub(crate) fn key_action(key: &Key, instruments: &[InstrumentKind]) -> Option<Action> {
     match key {
         Key::Named(NamedKey::F1) => Some(Action::ToggleHelp),
@@ -92,6 +95,7 @@ pub(crate) fn key_action(key: &Key, instruments: &[InstrumentKind]) -> Option<Ac
         Key::Character(s) => match s.as_str() {
             "?" => Some(Action::ToggleHelp),
             "r" | "R" => Some(Action::Report),
+            "g" | "G" => Some(Action::ToggleRegions),
             "u" | "U" => Some(Action::SetDepth(CutDepth::Upper)),
             "b" | "B" => Some(Action::SetDepth(CutDepth::Between)),
             "l" | "L" => Some(Action::SetDepth(CutDepth::Lower)),
@@ -102,6 +106,48 @@ pub(crate) fn key_action(key: &Key, instruments: &[InstrumentKind]) -> Option<Ac
             _ => None,
         },
         _ => None,
+    }
+}
+
+/// Carries out what `action` asks of the hand, as both front ends do while the session takes input:
+/// the instrument, the scalpel's depth, the roll, the tilt (relative to `camera`, the trainee's) and
+/// the insertion; the commands it makes are appended to `out`. Returns false for any other action.
+pub(crate) fn hand_action(
+    hand: &mut Hand,
+    camera: &OrbitCamera,
+    action: &Action,
+    out: &mut Vec<Command>,
+) -> bool {
+    match action {
+        Action::Select(kind) => hand.select(*kind, out),
+        Action::SetDepth(d) => hand.set_depth(*d, out),
+        Action::SetRoll(deg) => {
+            hand.tool.roll_deg = *deg;
+            out.push(Command::Roll(deg.to_radians()));
+        }
+        Action::SetTilt(deg) => {
+            hand.tool.tilt_deg = *deg;
+            out.push(Command::SetAxis(hand.axis(camera)));
+        }
+        Action::SetInsert(mm) => hand.tool.insert_mm = *mm,
+        _ => return false,
+    }
+    true
+}
+
+/// Shows or hides the exercise's regions and planned incision (G); returns what to tell the trainee.
+pub(crate) fn toggle_regions(renderer: &mut SceneRenderer) -> &'static str {
+    let mut style = *renderer.style();
+    style.show_regions = !style.show_regions;
+    renderer.set_style(style);
+    if style.show_regions { "regions shown (G hides them)" } else { "regions hidden (G shows them)" }
+}
+
+/// Puts the window's cameras (both views of a single window) back where the scene sets them (Home).
+pub(crate) fn reset_cameras(win: &mut ViewWindow) {
+    win.camera.reset();
+    if let Some(c) = win.second_camera.as_mut() {
+        c.reset();
     }
 }
 

@@ -411,18 +411,11 @@ fn queue_all(session: &mut Session, commands: Vec<Command>) {
 fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action: Action) {
     let live = session.input_enabled();
     let mut out = Vec::new();
+    if live && events::hand_action(&mut state.hand, &state.trainee.camera.camera, &action, &mut out) {
+        queue_all(session, out);
+        return;
+    }
     match action {
-        Action::Select(kind) if live => state.hand.select(kind, &mut out),
-        Action::SetDepth(d) if live => state.hand.set_depth(d, &mut out),
-        Action::SetRoll(deg) if live => {
-            state.hand.tool.roll_deg = deg;
-            out.push(Command::Roll(deg.to_radians()));
-        }
-        Action::SetTilt(deg) if live => {
-            state.hand.tool.tilt_deg = deg;
-            out.push(Command::SetAxis(state.hand.axis(&state.trainee.camera.camera)));
-        }
-        Action::SetInsert(mm) if live => state.hand.tool.insert_mm = mm,
         // Tuning is for educators: a trainee cannot soften the tissue mid-assessment.
         Action::SetMaterial(id, m) if live && options.educator => session.set_material(id, m),
         Action::SetSweeps(n) if live && options.educator => session.set_sweeps(n),
@@ -458,28 +451,15 @@ fn apply(state: &mut State, session: &mut Session, options: &AppOptions, action:
             state.trainee_ui.help.open = open;
             state.observer_ui.help.open = open;
         }
-        Action::ToggleRegions => {
-            let mut style = *state.renderer.style();
-            style.show_regions = !style.show_regions;
-            state.renderer.set_style(style);
-            session.say(if style.show_regions {
-                "regions shown (G hides them)"
-            } else {
-                "regions hidden (G shows them)"
-            });
-        }
+        Action::ToggleRegions => session.say(events::toggle_regions(&mut state.renderer)),
         Action::ResetCameras => {
-            state.trainee.camera.reset();
-            if let Some(c) = state.trainee.second_camera.as_mut() {
-                c.reset();
-            }
+            events::reset_cameras(&mut state.trainee);
             if let Some(w) = state.observer.as_mut() {
                 w.camera.reset();
             }
         }
         _ => {}
     }
-    queue_all(session, out);
 }
 
 /// Saves every view as `<date>_<time>-trainee.png` / `...-observer.png` (never overwriting an earlier
@@ -525,7 +505,6 @@ fn key_action(key: &Key, instruments: &[InstrumentKind]) -> Option<Action> {
         Key::Named(NamedKey::F5) => Some(Action::Reload),
         Key::Named(NamedKey::F12) => Some(Action::Screenshot),
         Key::Character(s) if matches!(s.as_str(), "p" | "P") => Some(Action::Screenshot),
-        Key::Character(s) if matches!(s.as_str(), "g" | "G") => Some(Action::ToggleRegions),
         _ => events::key_action(key, instruments),
     }
 }
@@ -677,8 +656,9 @@ mod tests {
         assert_eq!(key_action(&Key::Named(NamedKey::F5), &instruments), Some(Action::Reload));
         assert_eq!(key_action(&key("G"), &instruments), Some(Action::ToggleRegions));
         assert_eq!(key_action(&key("p"), &instruments), Some(Action::Screenshot));
-        // The keys the browser shares: the desktop's own ones are not among them.
-        assert_eq!(events::key_action(&key("g"), &instruments), None);
+        // The keys the browser shares (G too): the desktop's own ones are not among them.
+        assert_eq!(events::key_action(&key("g"), &instruments), Some(Action::ToggleRegions));
+        assert_eq!(events::key_action(&key("p"), &instruments), None);
         assert_eq!(events::key_action(&key("r"), &instruments), Some(Action::Report));
         assert_eq!(events::roll(&key("]"), 170.0), Some(Action::SetRoll(-175.0)));
         assert_eq!(events::roll(&key("["), 0.0), Some(Action::SetRoll(-15.0)));

@@ -351,18 +351,13 @@ impl WebApp {
         let session = &mut self.session;
         let live = session.input_enabled();
         let mut out = Vec::new();
+        if live && events::hand_action(&mut state.hand, &state.win.camera.camera, &action, &mut out) {
+            for c in out {
+                session.queue(c);
+            }
+            return;
+        }
         match action {
-            Action::Select(kind) if live => state.hand.select(kind, &mut out),
-            Action::SetDepth(d) if live => state.hand.set_depth(d, &mut out),
-            Action::SetRoll(deg) if live => {
-                state.hand.tool.roll_deg = deg;
-                out.push(Command::Roll(deg.to_radians()));
-            }
-            Action::SetTilt(deg) if live => {
-                state.hand.tool.tilt_deg = deg;
-                out.push(Command::SetAxis(state.hand.axis(&state.win.camera.camera)));
-            }
-            Action::SetInsert(mm) if live => state.hand.tool.insert_mm = mm,
             Action::SetMaterial(id, m) if live && self.educator => match m.validate() {
                 Ok(()) => session.queue(Command::SetMaterial(id, m)),
                 Err(e) => session.say(format!("material refused: {e}")),
@@ -371,24 +366,13 @@ impl WebApp {
             Action::Reload if live => {
                 let (source, label) = (session.source.clone(), session.label.clone());
                 self.switch(&source, &label);
-                return;
             }
-            Action::Report => {
-                self.report();
-                return;
-            }
+            Action::Report => self.report(),
             Action::Screenshot => session.say("in the browser: use the browser's own screenshot"),
             Action::ToggleHelp => state.ui.help.open = !state.ui.help.open,
-            Action::ResetCameras => {
-                state.win.camera.reset();
-                if let Some(c) = state.win.second_camera.as_mut() {
-                    c.reset();
-                }
-            }
+            Action::ToggleRegions => session.say(events::toggle_regions(&mut state.renderer)),
+            Action::ResetCameras => events::reset_cameras(&mut state.win),
             _ => {}
-        }
-        for c in out {
-            session.queue(c);
         }
     }
 }
