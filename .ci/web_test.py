@@ -12,8 +12,10 @@ Checks (exit status 1 on the first failure):
   3. a broken scene opened through the page's file picker shows the same `file:line:column` error as
      native `dissect check`;
   4. the mouse and keyboard work the instruments: key 1 takes the forceps and a left drag in the
-     trainee's view grasps the tissue and lifts it (the page's `data-live`).
-Writes default.png, mouse.png, script.png and broken.png into OUTDIR and prints the figures.
+     trainee's view grasps the tissue and lifts it (the page's `data-live`);
+  5. G hides the exercise's regions and planned incision in the trainee's view and shows them again.
+Writes default.png, regions_off.png, mouse.png, script.png and broken.png into OUTDIR and prints the
+figures.
 """
 
 import base64
@@ -169,6 +171,50 @@ def check_views(cdp, png, label):
             raise RuntimeError(f"{label}: the {name} view looks blank (spread {spread:.1f}, {colours} colours)")
 
 
+def guide_pixels(pixels, rect):
+    """Pixels of the drawn guides inside rect: the target's green outline and the forbidden strip's and
+    the planned incision's magenta and violet (green or blue well above red's share of the tissue)."""
+    w, h, data = pixels
+    x0, y0, rw, rh = (int(round(v)) for v in rect)
+    n = 0
+    for y in range(max(0, y0), min(h, y0 + rh)):
+        for x in range(max(0, x0), min(w, x0 + rw)):
+            r, g, b = data[(y * w + x) * 3:(y * w + x) * 3 + 3]
+            if (g > r + 60 and g > b + 30) or (b > g + 60 and r > g + 40):
+                n += 1
+    return n
+
+
+def press(cdp, key, code, vk):
+    for kind in ("keyDown", "keyUp"):
+        cdp.call("Input.dispatchKeyEvent", type=kind, key=key, code=code, windowsVirtualKeyCode=vk,
+                 **({"text": key} if kind == "keyDown" else {}))
+
+
+def check_regions_key(cdp, outdir, shown_png):
+    """G hides the regions and the planned incision (the guides' pixels in the trainee's view vanish)
+    and shows them again, as on the desktop. The canvas takes the focus from a click beside the views."""
+    views = json.loads(cdp.eval("document.body.dataset.views || '[]'") or "[]")
+    x, y, w, h = views[0]
+    for kind, buttons in (("mouseMoved", 0), ("mousePressed", 1), ("mouseReleased", 0)):
+        extra = {} if kind == "mouseMoved" else {"button": "left", "buttons": buttons, "clickCount": 1}
+        cdp.call("Input.dispatchMouseEvent", type=kind, x=5, y=y + h / 2, **extra)
+    shown = guide_pixels(ppm_pixels(shown_png), views[0])
+    press(cdp, "g", "KeyG", 71)
+    time.sleep(1)
+    off_png = os.path.join(outdir, "regions_off.png")
+    cdp.screenshot(off_png)
+    hidden = guide_pixels(ppm_pixels(off_png), views[0])
+    press(cdp, "g", "KeyG", 71)
+    time.sleep(1)
+    back_png = os.path.join(outdir, "regions_on.png")
+    cdp.screenshot(back_png)
+    again = guide_pixels(ppm_pixels(back_png), views[0])
+    print(f"web: G: guide pixels in the trainee's view {shown} shown, {hidden} after G, {again} after G again")
+    if shown < 500 or hidden > shown // 10 or again < shown // 2:
+        raise RuntimeError(f"G did not hide and show the regions: {shown}, {hidden}, {again} guide pixels")
+
+
 def check_mouse(cdp, outdir):
     """Drives the default scene with the mouse and keyboard, as a trainee does, through DevTools' input
     events: a click on the side panel gives the canvas the focus, key 1 takes the forceps, a left drag
@@ -258,6 +304,9 @@ def main():
         print(f"web: default exercise: {stats}")
         if first > FIRST_FRAME_BUDGET_MS:
             raise RuntimeError(f"first frame after {first:.0f} ms, over the {FIRST_FRAME_BUDGET_MS} ms budget")
+
+        # The regions and planned incision hidden and shown with G.
+        check_regions_key(cdp, outdir, png)
 
         # 2. The instruments by hand: the mouse selects the forceps (key 1), grasps the tissue in the
         # middle of the trainee's view and drags it up; the tissue moves with it.
