@@ -444,6 +444,26 @@ fn pace(episode: &Episode, speed: f64) -> (Duration, PaceMeter) {
     (period, PaceMeter::new(period, rate_hz))
 }
 
+/// Takes one input; when it brings a new world or a new speed, the step period and the pace meter
+/// are those of its own rate, and the answer is `true`.
+fn receive(
+    episode: &mut Episode,
+    input: Input,
+    say: &Sender<Event>,
+    control: &mut Control,
+    speed: &mut f64,
+    (period, meter): (&mut Duration, &mut PaceMeter),
+) -> bool {
+    let replace = matches!(input, Input::Replace(_));
+    take(episode, input, say, control);
+    if !replace && control.speed == *speed {
+        return false;
+    }
+    *speed = control.speed;
+    (*period, *meter) = pace(episode, *speed);
+    true
+}
+
 /// The thread's loop: inputs, wait for the deadline, step, publish now and then.
 fn run(
     mut episode: Episode,
@@ -463,12 +483,9 @@ fn run(
         loop {
             match inputs.try_recv() {
                 Ok(input) => {
-                    let replace = matches!(input, Input::Replace(_));
-                    take(&mut episode, input, say, &mut control);
-                    if replace || control.speed != speed {
-                        // A new world or a new speed: its own rate, a fresh clock, a frame at once.
-                        speed = control.speed;
-                        (period, meter) = pace(&episode, speed);
+                    if receive(&mut episode, input, say, &mut control, &mut speed, (&mut period, &mut meter))
+                    {
+                        // A fresh clock and a frame at once.
                         deadline = Instant::now();
                         last_publish = None;
                     }
@@ -509,12 +526,7 @@ fn run(
             meter.idle();
             match inputs.recv_timeout(IDLE_WAIT) {
                 Ok(input) => {
-                    let replace = matches!(input, Input::Replace(_));
-                    take(&mut episode, input, say, &mut control);
-                    if replace || control.speed != speed {
-                        speed = control.speed;
-                        (period, meter) = pace(&episode, speed);
-                    }
+                    receive(&mut episode, input, say, &mut control, &mut speed, (&mut period, &mut meter));
                     dirty = true;
                 }
                 Err(RecvTimeoutError::Timeout) => {}
