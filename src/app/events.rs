@@ -5,8 +5,8 @@
 //! for the session (reload, report, replay, tuning) stays with each front end.
 
 use glam::Vec2;
-use winit::event::{MouseButton, MouseScrollDelta};
-use winit::keyboard::{Key, NamedKey};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::keyboard::{Key, ModifiersState, NamedKey};
 
 use super::input::{self, Hand};
 use super::window::ViewWindow;
@@ -14,6 +14,62 @@ use crate::render::{OrbitCamera, SceneRenderer};
 use crate::simulation::{Command, InstrumentKind};
 use crate::tissue::CutDepth;
 use crate::ui::Action;
+
+/// What a pointer event asks of the trainee's hand once [`pointer_event`] has followed it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum HandDrive {
+    /// Nothing.
+    Rest,
+    /// The instrument follows the cursor (a stroke, or hovering).
+    Follow,
+    /// The left button went down in the trainee's view: grasp, start a cut or a push.
+    Press,
+}
+
+/// The modifier keys, the cursor, the buttons and the wheel on a window, alike in both front ends:
+/// the views' cameras and pointers follow them (see [`cursor_moved`], [`button`], [`zoom`]); the left
+/// button's release lets go of the tissue (`ctrl` keeps forceps clamped; the commands go to `out`)
+/// and the wheel moves a held instrument. `live`: the window shows the trainee's view and the session
+/// takes input (else only the cameras move); `consumed`: the panels took the event. Other events are
+/// left alone.
+pub(crate) fn pointer_event(
+    win: &mut ViewWindow,
+    hand: &mut Hand,
+    modifiers: &mut ModifiersState,
+    event: &WindowEvent,
+    live: bool,
+    consumed: bool,
+    out: &mut Vec<Command>,
+) -> HandDrive {
+    match event {
+        WindowEvent::ModifiersChanged(m) => *modifiers = m.state(),
+        WindowEvent::CursorMoved { position, .. } => {
+            let cursor = Vec2::new(position.x as f32, position.y as f32);
+            let camera_drag = cursor_moved(win, cursor, modifiers.shift_key());
+            if live && !camera_drag && (hand.busy() || win.view_at(cursor) == Some(0)) && !consumed {
+                return HandDrive::Follow;
+            }
+        }
+        WindowEvent::MouseInput { state, button: b, .. } => {
+            let pressed = *state == ElementState::Pressed;
+            if button(win, *b, pressed, consumed) && *b == MouseButton::Left && live {
+                if pressed && win.drag_view == 0 {
+                    return HandDrive::Press;
+                } else if !pressed {
+                    hand.release(modifiers.control_key(), out);
+                }
+            }
+        }
+        WindowEvent::MouseWheel { delta, .. } if !consumed => {
+            let notches = notches(*delta);
+            if !(live && hand.busy() && hand.wheel(notches)) {
+                zoom(win, notches);
+            }
+        }
+        _ => {}
+    }
+    HandDrive::Rest
+}
 
 /// The cursor moved to `cursor` (window pixels): both views' pointers follow it, and a right or
 /// middle drag turns or pans the camera of the view it started in (`shift` pans). Returns whether

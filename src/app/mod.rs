@@ -18,7 +18,7 @@ use std::time::Instant;
 use glam::Vec2;
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
-use winit::event::{ElementState, MouseButton, WindowEvent};
+use winit::event::{ElementState, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, ModifiersState, NamedKey};
 use winit::window::{Window, WindowId};
@@ -26,6 +26,7 @@ use winit::window::{Window, WindowId};
 use crate::render::{Gpu, OrbitCamera, SceneRenderer, Style, render_to_image, save_png};
 use crate::simulation::{Command, InstrumentKind};
 use crate::ui::{Action, Frame, ObserverUi, TraineeUi};
+use events::HandDrive;
 use input::{CameraRig, Hand};
 use session::Session;
 pub use session::default_recording_path;
@@ -550,44 +551,27 @@ impl ApplicationHandler for App {
                     session.say(e.to_string());
                 }
             }
-            WindowEvent::ModifiersChanged(m) => state.modifiers = m.state(),
-            WindowEvent::CursorMoved { position, .. } => {
-                let cursor = Vec2::new(position.x as f32, position.y as f32);
-                let camera_drag = events::cursor_moved(win, cursor, state.modifiers.shift_key());
-                // The trainee's view: the instrument follows the cursor (a stroke, or hovering).
-                if is_trainee
-                    && live
-                    && !camera_drag
-                    && (state.hand.busy() || win.view_at(cursor) == Some(0))
-                    && !consumed
-                {
-                    drive_hand(state, session, false);
+            WindowEvent::ModifiersChanged(_)
+            | WindowEvent::CursorMoved { .. }
+            | WindowEvent::MouseInput { .. }
+            | WindowEvent::MouseWheel { .. } => {
+                let mut out = Vec::new();
+                let (hand, modifiers) = (&mut state.hand, &mut state.modifiers);
+                let drive = events::pointer_event(
+                    win,
+                    hand,
+                    modifiers,
+                    &event,
+                    is_trainee && live,
+                    consumed,
+                    &mut out,
+                );
+                queue_all(session, out);
+                match drive {
+                    HandDrive::Follow => drive_hand(state, session, false),
+                    HandDrive::Press => drive_hand(state, session, true),
+                    HandDrive::Rest => {}
                 }
-            }
-            WindowEvent::MouseInput { state: button_state, button, .. } => {
-                let pressed = button_state == ElementState::Pressed;
-                if !events::button(win, button, pressed, consumed) {
-                    return;
-                }
-                if button == MouseButton::Left && is_trainee && live {
-                    if pressed && win.drag_view == 0 {
-                        drive_hand(state, session, true);
-                    } else if !pressed {
-                        let mut out = Vec::new();
-                        state.hand.release(state.modifiers.control_key(), &mut out);
-                        queue_all(session, out);
-                    }
-                }
-            }
-            WindowEvent::MouseWheel { delta, .. } => {
-                if consumed {
-                    return;
-                }
-                let notches = events::notches(delta);
-                if is_trainee && live && state.hand.busy() && state.hand.wheel(notches) {
-                    return;
-                }
-                events::zoom(win, notches);
             }
             WindowEvent::KeyboardInput { event, .. } => {
                 if consumed || event.state != ElementState::Pressed {

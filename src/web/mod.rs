@@ -27,10 +27,9 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::sync::Arc;
 
-use glam::Vec2;
 use web_time::Instant;
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, MouseButton, WindowEvent};
+use winit::event::{ElementState, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, ModifiersState, NamedKey};
 use winit::platform::web::{EventLoopExtWebSys, WindowAttributesExtWebSys};
@@ -39,6 +38,7 @@ use winit::window::{Window, WindowId};
 use crate::render::{Gpu, OrbitCamera, SceneRenderer, Style};
 use crate::simulation::Command;
 use crate::ui::{Action, Frame, TraineeUi};
+use events::HandDrive;
 use input::{CameraRig, Hand};
 use page::{Params, Request, Requests};
 use session::{SCENES, SCRIPTS, Session, bundled};
@@ -471,41 +471,21 @@ impl ApplicationHandler for WebApp {
                     session.say(e.to_string());
                 }
             }
-            WindowEvent::ModifiersChanged(m) => state.modifiers = m.state(),
-            WindowEvent::CursorMoved { position, .. } => {
-                let cursor = Vec2::new(position.x as f32, position.y as f32);
-                let camera_drag = events::cursor_moved(win, cursor, state.modifiers.shift_key());
-                if live && !camera_drag && (state.hand.busy() || win.view_at(cursor) == Some(0)) && !consumed
-                {
-                    drive_hand(state, session, false);
+            WindowEvent::ModifiersChanged(_)
+            | WindowEvent::CursorMoved { .. }
+            | WindowEvent::MouseInput { .. }
+            | WindowEvent::MouseWheel { .. } => {
+                let mut out = Vec::new();
+                let (hand, modifiers) = (&mut state.hand, &mut state.modifiers);
+                let drive = events::pointer_event(win, hand, modifiers, &event, live, consumed, &mut out);
+                for c in out {
+                    session.queue(c);
                 }
-            }
-            WindowEvent::MouseInput { state: button_state, button, .. } => {
-                let pressed = button_state == ElementState::Pressed;
-                if !events::button(win, button, pressed, consumed) {
-                    return;
+                match drive {
+                    HandDrive::Follow => drive_hand(state, session, false),
+                    HandDrive::Press => drive_hand(state, session, true),
+                    HandDrive::Rest => {}
                 }
-                if button == MouseButton::Left && live {
-                    if pressed && win.drag_view == 0 {
-                        drive_hand(state, session, true);
-                    } else if !pressed {
-                        let mut out = Vec::new();
-                        state.hand.release(state.modifiers.control_key(), &mut out);
-                        for c in out {
-                            session.queue(c);
-                        }
-                    }
-                }
-            }
-            WindowEvent::MouseWheel { delta, .. } => {
-                if consumed {
-                    return;
-                }
-                let notches = events::notches(delta);
-                if live && state.hand.busy() && state.hand.wheel(notches) {
-                    return;
-                }
-                events::zoom(win, notches);
             }
             WindowEvent::KeyboardInput { event, .. } => {
                 if consumed || event.state != ElementState::Pressed || event.repeat {
