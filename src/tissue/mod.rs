@@ -557,12 +557,16 @@ impl Tissue {
             let short = self.min_gap - gap;
             let free_l = !(self.body.is_pinned(lower) || self.body.is_held(lower));
             let free_u = !(self.body.is_pinned(upper) || self.body.is_held(upper));
-            let (dl, du) = match (free_l, free_u) {
+            // How a shortfall is shared: halves when both are free, else all to the free one.
+            let split = |short: f32| match (free_l, free_u) {
                 (true, true) => (-0.5 * short, 0.5 * short),
                 (true, false) => (-short, 0.0),
-                (false, true) => (0.0, short),
-                (false, false) => continue,
+                _ => (0.0, short),
             };
+            if !(free_l || free_u) {
+                continue;
+            }
+            let (dl, du) = split(short);
             // Each element is pushed by a chain reaction along the normal, so its neighbours follow
             // and no link leaves its limits (moving the pair alone stretched the links beside it by
             // up to the gap, which on a fine mesh is several spacings and tore them).
@@ -582,11 +586,7 @@ impl Tissue {
             let (Ok(pl), Ok(pu)) = (self.body.position(lower), self.body.position(upper)) else { continue };
             let short = self.min_gap - (pu[2] - pl[2]);
             if short > 0.0 {
-                let (dl, du) = match (free_l, free_u) {
-                    (true, true) => (-0.5 * short, 0.5 * short),
-                    (true, false) => (-short, 0.0),
-                    _ => (0.0, short),
-                };
+                let (dl, du) = split(short);
                 let _ = self.body.set_position(lower, [pl[0], pl[1], pl[2] + dl]);
                 let _ = self.body.set_position(upper, [pu[0], pu[1], pu[2] + du]);
             }
@@ -612,18 +612,8 @@ impl Tissue {
         tear2.extend(self.body.materials().iter().map(|m| m.tear_ratio.map(|r| r * r)));
         let mut hits = std::mem::take(&mut self.tear_hits);
         hits.clear();
-        // World positions straight from the lattice's where the map is a permutation (a flat surface
-        // is `(u, h, v)` exactly, a volume the identity): the same lengths, bit for bit, without a
-        // call per end.
-        let max_stretch2 = match self.geometry {
-            Geometry::Surface(Surface::Plane { .. } | Surface::Box { .. }) => {
-                self.scan_stretch(&tear2, &mut hits, |p| Vec3::new(p[0], p[2], p[1]))
-            }
-            Geometry::Volume => self.scan_stretch(&tear2, &mut hits, Vec3::from),
-            Geometry::Surface(surface) => {
-                self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(surface.to_world(p)))
-            }
-        };
+        let geometry = self.geometry;
+        let max_stretch2 = self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(geometry.to_world(p)));
         let mut torn = 0;
         for &l in &hits {
             if self.break_link(l, BreakReason::Tear) {
