@@ -64,10 +64,7 @@ fn thread_benches(c: &mut Criterion) {
         pace.steps_per_second,
         pace.worst_late_us,
         pace.worst_jitter_us,
-        match sim.scheduling() {
-            Ok(()) => "real-time scheduling".to_string(),
-            Err(why) => why.to_string(),
-        }
+        sim.scheduling()
     );
     let _ = sim.stop();
 }

@@ -108,11 +108,8 @@ pub fn run(options: AppOptions) -> Result<(), AppError> {
         Source::Replay(path) => Session::replay(path)?,
         Source::Demo(script) => Session::demo(options.scene.as_deref(), script)?,
     };
-    // How the simulation thread is scheduled (`runner::priority`), in one line.
-    match session.scheduling() {
-        Ok(()) => println!("dissect: simulation thread: real-time scheduling"),
-        Err(why) => println!("dissect: simulation thread: normal scheduling ({why})"),
-    }
+    // How the simulation thread is scheduled (`runner::priority`), in one line, once.
+    eprintln!("dissect: {}", session.scheduling());
     let event_loop = EventLoop::new().map_err(|e| AppError::Window(e.to_string()))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App { options, session, state: None, error: None, finished: false };

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant, SystemTime};
 use super::AppError;
 use crate::chainmail::{Material, MaterialId};
 use crate::instrument::Picker;
+use crate::runner::priority::{Grant, HOW_TO_GRANT};
 use crate::runner::{Episode, Event, Given, Input, Player, Published, SimThread, Source};
 use crate::scene::{Action as ScriptAction, DEFAULT_SCENE, DEFAULT_SCENE_PATH, Recorder, Recording, Scene};
 use crate::simulation::{CameraSpec, Command, InstrumentKind, Snapshot, WorldView};
@@ -295,8 +296,8 @@ impl Session {
         }
     }
 
-    /// Whether the simulation thread was granted real-time scheduling, or why not.
-    pub fn scheduling(&self) -> Result<(), &str> {
+    /// How the simulation thread was scheduled when it started: real-time and how, or why not.
+    pub fn scheduling(&self) -> &crate::runner::priority::Outcome {
         self.sim.scheduling()
     }
 
@@ -387,6 +388,8 @@ impl Session {
             input_lag_steps: pace.input_lag_steps,
             behind: pace.behind,
             realtime: pace.realtime,
+            priority: pace.grant.label(),
+            how_to_grant: (pace.grant == Grant::Normal).then_some(HOW_TO_GRANT),
         });
         self.timing.push(FrameSample {
             t: self.started.elapsed().as_secs_f64(),

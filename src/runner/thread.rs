@@ -23,6 +23,7 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 use hdrhistogram::Histogram;
 
 use super::Episode;
+use super::priority::{Grant, MAX_UNBLOCKED, Outcome, Scheduler};
 use crate::haptics::HapticLink;
 use crate::instrument::Hit;
 use crate::simulation::{Command, WorldView};
@@ -42,6 +43,9 @@ const SPIN: Duration = Duration::from_micros(125);
 /// The same for a real-time thread (no timer slack, scheduled at once): less time spinning, which is
 /// time the windows do not get.
 const SPIN_REALTIME: Duration = Duration::from_micros(50);
+/// How long a real-time thread behind its deadlines sleeps when it has not blocked for
+/// [`MAX_UNBLOCKED`] (long enough that the sleep does block).
+const BLOCK: Duration = Duration::from_micros(50);
 /// A real-time thread whose steps took this share of their period on average over a second gives up
 /// real-time scheduling for the next second (it would hold a core the windows need).
 const REALTIME_MAX_LOAD: f64 = 0.75;
@@ -122,6 +126,8 @@ pub struct Pace {
     pub behind: bool,
     /// Whether the thread runs with real-time scheduling now (see [`super::priority`]).
     pub realtime: bool,
+    /// How it was granted real-time scheduling when it started (normal: it was not).
+    pub grant: Grant,
     /// Steps between the frame a batch of input was given on and the step it reached the world.
     pub input_lag_steps: u64,
     /// Steps run since the thread started (or since the episode was replaced).
@@ -270,7 +276,7 @@ pub struct SimThread {
     events: Receiver<Event>,
     output: triple_buffer::Output<Published>,
     handle: Option<JoinHandle<Episode>>,
-    scheduling: Result<(), String>,
+    scheduling: Outcome,
 }
 
 impl SimThread {
@@ -285,20 +291,21 @@ impl SimThread {
         let (say, events) = crossbeam_channel::unbounded();
         let (told, scheduled) = crossbeam_channel::bounded(1);
         let handle = std::thread::Builder::new().name("dissect-sim".into()).spawn(move || {
-            let granted = super::priority::realtime();
-            let realtime = granted.is_ok();
-            let _ = told.send(granted);
-            run(episode, &inputs, &say, publisher, realtime)
+            let (scheduler, outcome) = Scheduler::acquire();
+            let _ = told.send(outcome);
+            run(episode, &inputs, &say, publisher, scheduler)
         })?;
-        let scheduling = scheduled
-            .recv_timeout(Duration::from_secs(5))
-            .unwrap_or_else(|_| Err("the simulation thread did not say how it is scheduled".into()));
+        // RealtimeKit answers over D-Bus, whose calls time out after 10 s.
+        let scheduling = scheduled.recv_timeout(Duration::from_secs(15)).unwrap_or_else(|_| Outcome {
+            grant: Grant::Normal,
+            refused: vec![(Grant::Normal, "the simulation thread did not say how it is scheduled".into())],
+        });
         Ok(Self { input, events, output, handle: Some(handle), scheduling })
     }
 
-    /// Whether the thread was granted real-time scheduling when it started, or why not.
-    pub fn scheduling(&self) -> Result<(), &str> {
-        self.scheduling.as_ref().map(|_| ()).map_err(String::as_str)
+    /// How the thread was scheduled when it started: real-time and how, or why not.
+    pub fn scheduling(&self) -> &Outcome {
+        &self.scheduling
     }
 
     /// Sends the thread an input (dropped if the thread has ended).
@@ -364,21 +371,15 @@ struct Control {
     lag: u64,
     speed: f64,
     fast_forward: Option<u64>,
-    /// Whether the thread may have real-time scheduling (it was granted it at the start).
-    may_realtime: bool,
-    /// Whether it has it now.
-    realtime: bool,
+    /// The thread's real-time scheduling: how it was granted, whether it holds it now.
+    scheduler: Scheduler,
 }
 
 impl Control {
-    /// Takes or gives up real-time scheduling (when it was granted at all).
+    /// Takes or gives up real-time scheduling (when it was granted at all; a failure leaves it as it
+    /// was).
     fn set_realtime(&mut self, on: bool) {
-        if self.may_realtime && on != self.realtime {
-            let done = if on { super::priority::realtime() } else { super::priority::normal() };
-            if done.is_ok() {
-                self.realtime = on;
-            }
-        }
+        let _ = if on { self.scheduler.resume() } else { self.scheduler.release() };
     }
 }
 
@@ -470,10 +471,12 @@ fn run(
     inputs: &Receiver<Input>,
     say: &Sender<Event>,
     mut publisher: triple_buffer::Input<Published>,
-    realtime: bool,
+    scheduler: Scheduler,
 ) -> Episode {
-    let mut control =
-        Control { paused: false, lag: 0, speed: 1.0, fast_forward: None, may_realtime: realtime, realtime };
+    let mut control = Control { paused: false, lag: 0, speed: 1.0, fast_forward: None, scheduler };
+    // When the thread last blocked (slept natively or waited for input): a real-time thread must block
+    // now and then (`RLIMIT_RTTIME`, see `MAX_UNBLOCKED`).
+    let mut blocked = Instant::now();
     let mut speed = control.speed;
     let (mut period, mut meter) = pace(&episode, speed);
     let mut deadline = Instant::now();
@@ -524,6 +527,7 @@ fn run(
                 dirty = false;
             }
             meter.idle();
+            blocked = Instant::now();
             match inputs.recv_timeout(IDLE_WAIT) {
                 Ok(input) => {
                     receive(&mut episode, input, say, &mut control, &mut speed, (&mut period, &mut meter));
@@ -536,7 +540,17 @@ fn run(
             continue;
         }
         // Spinning, not yielding: a yield may hand the core to the renderer's threads for a slice.
-        let spin = if control.realtime { SPIN_REALTIME } else { SPIN };
+        let realtime = control.scheduler.realtime();
+        let spin = if realtime { SPIN_REALTIME } else { SPIN };
+        let now = Instant::now();
+        if deadline.saturating_duration_since(now) > spin + BLOCK {
+            // The sleeper sleeps natively (blocks, for at least `BLOCK`) until `spin` before the deadline.
+            blocked = now;
+        } else if realtime && now - blocked >= MAX_UNBLOCKED {
+            // Behind its deadlines a thread never sleeps: a real-time one blocks briefly now and then.
+            std::thread::sleep(BLOCK);
+            blocked = Instant::now();
+        }
         spin_sleep::SpinSleeper::new(spin.as_nanos() as u32)
             .with_spin_strategy(spin_sleep::SpinStrategy::SpinLoopHint)
             .sleep_until(deadline);
@@ -573,7 +587,8 @@ fn publish(
     let frame = publisher.input_buffer_mut();
     frame.fill(episode);
     frame.pace = Pace {
-        realtime: control.realtime,
+        realtime: control.scheduler.realtime(),
+        grant: control.scheduler.grant(),
         input_lag_steps: control.lag,
         total_p99_late_us: p99_us(meter.total_late.as_ref()),
         ..meter.done
@@ -653,8 +668,8 @@ mod tests {
     #[test]
     fn a_real_time_thread_seeks_with_normal_scheduling() {
         let mut sim = SimThread::spawn(episode()).expect("thread");
-        if let Err(why) = sim.scheduling() {
-            eprintln!("skipped where real-time scheduling is not granted: {why}");
+        if !sim.scheduling().realtime() {
+            eprintln!("skipped where real-time scheduling is not granted: {}", sim.scheduling());
             return;
         }
         let wait = |sim: &mut SimThread, what: &str, until: &dyn Fn(&Published) -> bool| {

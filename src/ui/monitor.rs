@@ -20,13 +20,18 @@ impl View for MonitorPanel {
         ));
         if let Some(p) = t.pace() {
             ui.label(format!(
-                "simulation thread{}: {:.0} steps/s · worst jitter {:.0} µs · p99 late {:.0} µs · input lag {} steps",
-                if p.realtime { " (real-time)" } else { "" },
+                "simulation thread, {}{}: {:.0} steps/s · worst jitter {:.0} µs · p99 late {:.0} µs · input lag {} steps",
+                p.priority,
+                // Granted, but given up for now (a seek, or steps too long for their period).
+                if p.how_to_grant.is_none() && !p.realtime { ", off for now" } else { "" },
                 p.steps_per_second,
                 p.worst_jitter_us,
                 p.p99_late_us,
                 p.input_lag_steps
             ));
+            if let Some(how) = p.how_to_grant {
+                ui.label(format!("steps may start milliseconds late while the windows draw; {how}"));
+            }
         }
         let total = c.total_us().max(f32::MIN_POSITIVE);
         egui::Grid::new("phases").striped(true).num_columns(3).show(ui, |ui| {

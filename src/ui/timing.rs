@@ -37,6 +37,10 @@ pub struct ThreadPace {
     pub behind: bool,
     /// Whether the thread has real-time scheduling.
     pub realtime: bool,
+    /// How it was scheduled at its start, in a few words ("real-time (RealtimeKit)", "normal priority").
+    pub priority: &'static str,
+    /// With normal priority, how to grant it real-time (one sentence).
+    pub how_to_grant: Option<&'static str>,
 }
 
 /// A rolling history of [`FrameSample`]s, and the simulation thread's pace when there is one.
