@@ -57,6 +57,7 @@ mod simd;
 mod stencil;
 mod workspace;
 
+pub(crate) use body::INTACT;
 pub use body::{Body, BreakReason};
 pub use error::ChainMailError;
 pub use ids::{ElementId, LinkId, MaterialId};

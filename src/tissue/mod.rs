@@ -62,6 +62,11 @@ impl Geometry {
     }
 }
 
+/// A little under 1: the tear check's multiplication test lets through every link whose stretch, divided
+/// out and rounded, could lie above the bar (16 units in the last place of margin against the 3 that
+/// rounding can take).
+const NEAR: f32 = 1.0 - 1e-6;
+
 /// What a link is part of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LinkKind {
@@ -613,7 +618,13 @@ impl Tissue {
         let mut hits = std::mem::take(&mut self.tear_hits);
         hits.clear();
         let geometry = self.geometry;
-        let max_stretch2 = self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(geometry.to_world(p)));
+        // A plane's world is its lattice with the axes permuted, which leaves lengths alone.
+        let max_stretch2 =
+            if matches!(geometry, Geometry::Surface(Surface::Plane { .. } | Surface::Box { .. })) {
+                self.scan_stretch(&tear2, &mut hits, |p| Vec3::new(p[0], p[2], p[1]))
+            } else {
+                self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(geometry.to_world(p)))
+            };
         let mut torn = 0;
         for &l in &hits {
             if self.break_link(l, BreakReason::Tear) {
@@ -640,35 +651,47 @@ impl Tissue {
         world: impl Fn([f32; 3]) -> Vec3,
     ) -> f32 {
         let lat = self.body.lattice();
-        let (pos, rest_len, kind) = (self.body.positions(), &self.rest_len[..], &self.link_kind[..]);
+        let (adj_start, adj_link, adj_nbr) = (&lat.adj_start[..], &lat.adj_link[..], &lat.adj_nbr[..]);
+        let (pos, state, material) =
+            (&self.body.pos[..], &self.body.link_state[..], &self.body.link_material[..]);
+        let (rest_len, kind) = (&self.rest_len[..], &self.link_kind[..]);
         let mut max_stretch2 = 0.0f32;
         for &e in &self.active {
             let e = e.index();
-            let (Some(&s0), Some(&s1), Some(&p)) =
-                (lat.adj_start.get(e), lat.adj_start.get(e + 1), pos.get(e))
+            let (Some(&s0), Some(&s1), Some(&p)) = (adj_start.get(e), adj_start.get(e + 1), pos.get(e))
             else {
                 continue;
             };
             let pa = world(p);
             for s in s0 as usize..s1 as usize {
-                let raw = lat.adj_link[s];
+                let raw = adj_link[s];
                 if raw & crate::chainmail::SIDE_B_BIT != 0 {
                     continue; // each link is checked from its `a` end only
                 }
-                let l = LinkId(raw);
-                if !self.body.link_intact(l) {
+                let l = raw as usize;
+                if state[l] != crate::chainmail::INTACT {
                     continue;
                 }
-                let Some(&q) = pos.get(lat.adj_nbr[s] as usize) else { continue };
-                let rest = rest_len[l.index()].max(f32::MIN_POSITIVE);
-                let stretch2 = world(q).distance_squared(pa) / (rest * rest);
+                let q = pos[adj_nbr[s] as usize];
+                let rest = rest_len[l].max(f32::MIN_POSITIVE);
+                let rest2 = rest * rest;
+                let d2 = world(q).distance_squared(pa);
                 // The force proxy is the layers' stretch: fibres are meant to stretch before they are cut.
-                if matches!(kind[l.index()], LinkKind::Layer(_)) {
-                    max_stretch2 = max_stretch2.max(stretch2);
-                }
-                let ratio2 = self.body.link_material(l).and_then(|m| tear2.get(m.index()).copied().flatten());
-                if ratio2.is_some_and(|r| stretch2 > r) {
-                    hits.push(l);
+                let layer = matches!(kind[l], LinkKind::Layer(_));
+                let ratio2 = tear2.get(material[l].index()).copied().flatten().unwrap_or(f32::INFINITY);
+                // Most links are neither the largest stretch so far nor past their tear ratio: a
+                // multiplication tells, a little on the safe side (`NEAR` lets through every link whose
+                // quotient below could round above the bar), so the division runs only near the bar
+                // and its results are exactly those of dividing every link.
+                let bar = if layer { ratio2.min(max_stretch2) } else { ratio2 };
+                if !(d2 <= bar * rest2 * NEAR) {
+                    let stretch2 = d2 / rest2;
+                    if layer {
+                        max_stretch2 = max_stretch2.max(stretch2);
+                    }
+                    if stretch2 > ratio2 {
+                        hits.push(LinkId(raw));
+                    }
                 }
             }
         }
