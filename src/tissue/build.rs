@@ -539,6 +539,7 @@ impl Tissue {
             region_scratch: Vec::with_capacity(n),
             region_bits: Vec::with_capacity(n.div_ceil(64)),
             relax_cursor: 0,
+            step_moved: 0,
             settled: false,
             cut_queue: Vec::new(),
             events: Vec::new(),

@@ -178,6 +178,9 @@ pub struct Tissue {
     /// Where the next partial relaxation sweep of a large region starts (an element id; see
     /// `settle::REGION_UPDATES`).
     pub(crate) relax_cursor: u32,
+    /// Elements the step's chain reactions have moved so far (relaxation gets what is left of
+    /// `settle::REGION_UPDATES`).
+    pub(crate) step_moved: usize,
     /// The last relaxation converged and nothing has moved since: [`Tissue::end_step`] may forget the
     /// disturbed region.
     pub(crate) settled: bool,
@@ -419,6 +422,7 @@ impl Tissue {
 
     fn activate_moved(&mut self) {
         let moved = self.ws.moved.len();
+        self.step_moved += moved;
         for k in 0..moved {
             let e = ElementId(self.ws.moved[k]);
             self.activate(e.0);
@@ -520,6 +524,7 @@ impl Tissue {
         if matches!(self.geometry, Geometry::Surface(_)) {
             self.drift(); // before the region forgets what moved
         }
+        self.step_moved = 0;
         if self.settled {
             for e in self.active.drain(..) {
                 self.in_active[e.index()] = false;

@@ -21,6 +21,12 @@ pub const SETTLED: f32 = 1e-7;
 /// out of its limits. Counted in updates, not time, so that runs stay bit for bit reproducible.
 pub const REGION_UPDATES: usize = 1 << 13;
 
+/// Fewest element updates one step's relaxation makes: a step whose chain reactions moved many
+/// elements (a lift raising the whole tent) has done much of its work already, so its relaxation gets
+/// [`REGION_UPDATES`] less what they moved, but never less than this; the region keeps relaxing over
+/// the next, quieter steps.
+pub const REGION_UPDATES_LEAST: usize = REGION_UPDATES / 4;
+
 impl Tissue {
     /// Damped Gauss-Seidel sweeps over the disturbed region within `budget` and [`REGION_UPDATES`]
     /// (the element update of
@@ -30,14 +36,16 @@ impl Tissue {
         self.ws.fit(&self.body);
         self.order_region();
         self.last_move.resize(self.body.element_count(), 0.0);
-        let sweeps = (REGION_UPDATES / self.active.len().max(1)).max(1);
+        // The step's chain reactions have done part of its work already.
+        let updates = REGION_UPDATES.saturating_sub(self.step_moved).max(REGION_UPDATES_LEAST);
+        let sweeps = (updates / self.active.len().max(1)).max(1);
         let budget = RelaxBudget { max_sweeps: budget.max_sweeps.min(sweeps as u32), ..budget };
-        // A region larger than the step's updates: the next `REGION_UPDATES` elements from the
-        // cursor, round the region (in element order), and no claim of convergence.
-        let (start, len) = if self.active.len() > REGION_UPDATES {
+        // A region larger than the step's updates: the next `updates` elements from the cursor,
+        // round the region (in element order), and no claim of convergence.
+        let (start, len) = if self.active.len() > updates {
             let cursor = self.relax_cursor;
             let at = self.active.partition_point(|e| e.0 < cursor);
-            (if at == self.active.len() { 0 } else { at }, REGION_UPDATES)
+            (if at == self.active.len() { 0 } else { at }, updates)
         } else {
             (0, self.active.len())
         };
