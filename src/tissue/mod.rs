@@ -689,7 +689,8 @@ impl Tissue {
                 // quotient below could round above the bar), so the division runs only near the bar
                 // and its results are exactly those of dividing every link.
                 let bar = if layer { ratio2.min(max_stretch2) } else { ratio2 };
-                if !(d2 <= bar * rest2 * NEAR) {
+                // (A NaN goes on to the division, as it always did.)
+                if matches!(d2.partial_cmp(&(bar * rest2 * NEAR)), Some(std::cmp::Ordering::Greater) | None) {
                     let stretch2 = d2 / rest2;
                     if layer {
                         max_stretch2 = max_stretch2.max(stretch2);
