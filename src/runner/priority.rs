@@ -251,6 +251,8 @@ fn rtkit_reason(message: &str) -> String {
         "not installed or not running".to_string()
     } else if message.contains("Failed to connect to socket") || message.contains("NoServer") {
         "no system D-Bus".to_string()
+    } else if message.contains("setrlimit") {
+        format!("cannot set RLIMIT_RTTIME as it requires ({message})")
     } else if message.contains("NoReply") {
         "no answer".to_string()
     } else if message.contains("AccessDenied") || message.contains("Operation not permitted") {
@@ -381,6 +383,11 @@ mod tests {
         assert_eq!(
             rtkit_reason("AudioThreadPriorityError: Thread promotion error (Operation not permitted)"),
             "refused (the user is not in an active desktop session, or polkit denies it)"
+        );
+        assert!(
+            rtkit_reason("AudioThreadPriorityError: setrlimit (Operation not permitted (os error 1))")
+                .starts_with("cannot set RLIMIT_RTTIME"),
+            "a limit the process may not set is not polkit's refusal"
         );
     }
 }
