@@ -30,7 +30,13 @@ impl View for MonitorPanel {
                 p.input_lag_steps
             ));
             if let Some(how) = p.how_to_grant {
-                ui.label(format!("steps may start milliseconds late while the windows draw; {how}"));
+                // The how-to is long for this narrow panel: on hover (the log has it in full).
+                ui.small("steps may start milliseconds late while the windows draw (hover: how to grant real-time)")
+                    .on_hover_ui(|ui| {
+                        // Narrow enough to stay inside the observer's window.
+                        ui.set_max_width(260.0);
+                        ui.label(how);
+                    });
             }
         }
         let total = c.total_us().max(f32::MIN_POSITIVE);
