@@ -179,19 +179,36 @@ impl Scheduler {
         self.realtime
     }
 
-    /// Takes real-time scheduling again, the way it was granted (nothing when it never was).
+    /// Takes real-time scheduling again, the way it was granted (nothing when it never was). A
+    /// refusal is final: the thread keeps normal scheduling from then on ([`Grant::Normal`]) and asks
+    /// no more (a RealtimeKit that refuses, rate-limits or hangs would otherwise be asked every second,
+    /// and each ask holds the thread for a D-Bus round trip).
     pub fn resume(&mut self) -> Result<(), String> {
         if self.realtime || self.grant == Grant::Normal {
             return Ok(());
         }
-        match self.grant {
-            Grant::Direct => realtime()?,
+        let asked = match self.grant {
             #[cfg(target_os = "linux")]
-            Grant::Rtkit => rtkit()?,
-            _ => return Ok(()),
+            Grant::Rtkit => rtkit(),
+            _ => realtime(),
+        };
+        match asked {
+            Ok(()) => {
+                self.realtime = true;
+                Ok(())
+            }
+            Err(why) => {
+                let way = self.grant;
+                self.grant = Grant::Normal;
+                Err(format!(
+                    "simulation thread: {} refused real-time scheduling again ({why}): normal priority from now on",
+                    match way {
+                        Grant::Rtkit => "RealtimeKit",
+                        _ => "the system",
+                    }
+                ))
+            }
         }
-        self.realtime = true;
-        Ok(())
     }
 
     /// Gives real-time scheduling up (back to normal scheduling at nice 0).

@@ -376,10 +376,12 @@ struct Control {
 }
 
 impl Control {
-    /// Takes or gives up real-time scheduling (when it was granted at all; a failure leaves it as it
-    /// was).
-    fn set_realtime(&mut self, on: bool) {
-        let _ = if on { self.scheduler.resume() } else { self.scheduler.release() };
+    /// Takes or gives up real-time scheduling (when it was granted at all); a failure is said to the
+    /// window (a refusal to take it back is final, [`Scheduler::resume`]).
+    fn set_realtime(&mut self, on: bool, say: &Sender<Event>) {
+        if let Err(why) = if on { self.scheduler.resume() } else { self.scheduler.release() } {
+            let _ = say.send(Event::Message(why));
+        }
     }
 }
 
@@ -501,7 +503,7 @@ fn run(
         if let Some(target) = control.fast_forward {
             // A seek: no deadlines until the target, the frame refilled as it goes (its progress);
             // flat out, so with normal scheduling (the windows keep their share of the cores).
-            control.set_realtime(false);
+            control.set_realtime(false, say);
             let arrived = episode.world().step_count() >= target || episode.finished();
             if !arrived && episode.step().is_some() {
                 messages(&mut episode, say);
@@ -513,7 +515,7 @@ fn run(
                 continue;
             }
             control.fast_forward = None;
-            control.set_realtime(true);
+            control.set_realtime(true, say);
             meter.idle();
             deadline = Instant::now();
             publish(&mut publisher, &episode, &meter, &control);
@@ -559,7 +561,7 @@ fn run(
         let end = Instant::now();
         if stepped {
             if meter.step(start, deadline, end - start) {
-                control.set_realtime(keeps_realtime(&meter.done, period));
+                control.set_realtime(keeps_realtime(&meter.done, period), say);
             }
             dirty = true;
         }
