@@ -1,6 +1,7 @@
 //! Plays the meninges exercise with the careful script at a resolution and prints one line per step
 //! (tab separated: step, total µs, each phase's µs, elements moved by each pass, relaxation sweeps,
-//! the disturbed region's size, the step's wall and CPU time), for finding which steps of a session cost what:
+//! the disturbed region's size, the step's wall and CPU time, the moves of the repair that keeps the
+//! links within their limits), for finding which steps of a session cost what:
 //! `target/release/examples/exercise_trace 256 192 > trace.tsv`; another layered scene and script
 //! after the resolution: `exercise_trace 128 96 scenes/durotomy.ron scenes/scripts/durotomy_careful.ron`.
 use std::time::Instant;
@@ -32,7 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut world = scene.build_world(false)?;
     let mut player = Player::new(script.0.clone());
     println!(
-        "step\ttotal_us\tinput\tchain\tnormal\trelax\tcontact\tcuts\tforces\tmoved_chain\tmoved_normal\tsweeps\tactive\twall_us\tcpu_us"
+        "step\ttotal_us\tinput\tchain\tnormal\trelax\tcontact\tcuts\tforces\tmoved_chain\tmoved_normal\tsweeps\tactive\twall_us\tcpu_us\trepairs"
     );
     loop {
         player.feed(&mut world);
@@ -47,7 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let cpu = cpu.elapsed().as_secs_f32() * 1e6;
         let ph: Vec<String> = c.phase_us.iter().map(|p| format!("{p:.1}")).collect();
         println!(
-            "{}\t{:.1}\t{}\t{}\t{}\t{}\t{}\t{:.1}\t{:.1}",
+            "{}\t{:.1}\t{}\t{}\t{}\t{}\t{}\t{:.1}\t{:.1}\t{}",
             c.step,
             c.total_us(),
             ph.join("\t"),
@@ -56,7 +57,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             c.relax_sweeps,
             world.tissue().active_count(),
             wall,
-            cpu
+            cpu,
+            c.limit_repairs
         );
     }
     Ok(())

@@ -1,7 +1,15 @@
 //! Limits hold: on the meninges exercise (coarsened to keep the test quick), random sessions of
 //! grasps, lifts, pushes and cuts never leave an intact link outside its material's limits after a
-//! step. Links that go past their tear ratio break (and are counted as torn); every other link stays in
-//! its constraint box, up to rounding.
+//! step, up to rounding. Links that go past their tear ratio break (and are counted as torn).
+//!
+//! Where the limits could not all hold with the instrument where it is, the engine decides as
+//! follows (`src/tissue/limits.rs`), and this test holds it to that: pinned elements never move;
+//! elements held by the forceps' jaws give way (the tissue slips in the jaws, so the pull is cut
+//! short, as pins cut a chain reaction short) rather than leave a link outside its box; the layers
+//! never cross (a layer pressed between the instrument and the lower layer pushes the instrument's
+//! hold back). The probe holds nothing: what it pushes may be pushed back. Since the rest shape
+//! holds every limit and only pins stay put, some placement always does, and no intact link is let
+//! off.
 
 mod common;
 
@@ -61,7 +69,6 @@ fn worst_violation(world: &World) -> (f32, u32) {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(12))]
     #[test]
-    #[ignore = "fails today: a probe pushing the dura deep moves the arachnoid through several fibres at once, and Gibson's chain reaction (each element within its sponsor's box only) leaves arachnoid links up to about 0.17 spacings outside their limits, which relaxation cannot always repair (issue 14, point 3)"]
     fn no_intact_link_leaves_its_limits(acts in proptest::collection::vec((act(), 1u8..30), 1..30)) {
         let mut world = world(40, 30);
         let spacing = world.tissue().spacing();

@@ -71,6 +71,9 @@ pub struct StepCounters {
     pub relax_sweeps: u32,
     /// Layer pairs pushed apart by the contact phase.
     pub contact_fixes: u32,
+    /// Element moves that brought links the step left outside their limits back inside (timed with
+    /// contact).
+    pub limit_repairs: u32,
     /// Links cut.
     pub links_cut: u32,
     /// Links torn.
@@ -306,6 +309,7 @@ impl World {
         // Contact between the layers.
         let t = Instant::now();
         c.contact_fixes = self.tissue.enforce_contact();
+        c.limit_repairs = self.tissue.restore_limits();
         c.phase_us[4] = ms(t);
 
         // Cuts and tears: the one place the topology changes.

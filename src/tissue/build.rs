@@ -556,6 +556,7 @@ impl Tissue {
             forces: Default::default(),
             cut_energy: 0.0,
             probe_contact: None,
+            repair: Default::default(),
         };
         tissue.forces = super::force::LinkFactors::of(&tissue);
         tissue

@@ -17,6 +17,7 @@ mod cut;
 mod fem_drive;
 mod force;
 mod grasp;
+mod limits;
 mod link_grid;
 mod mesh;
 mod settle;
@@ -211,6 +212,9 @@ pub struct Tissue {
     pub(crate) cut_energy: f32,
     /// The element the probe pressed on in the last push.
     pub(crate) probe_contact: Option<ElementId>,
+    /// What the step moved, and the scratch of the repair that keeps the links within their limits
+    /// (see `limits.rs`).
+    pub(crate) repair: limits::Repair,
 }
 
 impl Tissue {
@@ -423,8 +427,10 @@ impl Tissue {
     fn activate_moved(&mut self) {
         let moved = self.ws.moved.len();
         self.step_moved += moved;
+        self.repair.fit(self.body.element_count());
         for k in 0..moved {
             let e = ElementId(self.ws.moved[k]);
+            self.repair.note(e.0, self.ws.old[e.index()]);
             self.activate(e.0);
             let (s0, s1) = {
                 let lat = self.body.lattice();
@@ -525,6 +531,7 @@ impl Tissue {
             self.drift(); // before the region forgets what moved
         }
         self.step_moved = 0;
+        self.repair.next_step();
         if self.settled {
             for e in self.active.drain(..) {
                 self.in_active[e.index()] = false;
@@ -597,6 +604,9 @@ impl Tissue {
             let short = self.min_gap - (pu[2] - pl[2]);
             if short > 0.0 {
                 let (dl, du) = split(short);
+                self.repair.fit(self.body.element_count());
+                self.repair.note(lower.0, pl);
+                self.repair.note(upper.0, pu);
                 let _ = self.body.set_position(lower, [pl[0], pl[1], pl[2] + dl]);
                 let _ = self.body.set_position(upper, [pu[0], pu[1], pu[2] + du]);
             }
