@@ -425,20 +425,30 @@ impl Tissue {
     }
 
     fn activate_moved(&mut self) {
-        let moved = self.ws.moved.len();
-        self.step_moved += moved;
+        self.step_moved += self.ws.moved.len();
         self.repair.fit(self.body.element_count());
-        for k in 0..moved {
-            let e = ElementId(self.ws.moved[k]);
-            self.repair.note(e.0, self.ws.old[e.index()]);
-            self.activate(e.0);
-            let (s0, s1) = {
-                let lat = self.body.lattice();
-                (lat.adj_start[e.index()] as usize, lat.adj_start[e.index() + 1] as usize)
-            };
-            for s in s0..s1 {
-                let n = self.body.lattice().adj_nbr[s];
-                self.activate(n);
+        let lat = self.body.lattice();
+        let (adj_start, adj_nbr) = (&lat.adj_start[..], &lat.adj_nbr[..]);
+        let (last_move, in_active, active) = (&mut self.last_move[..], &mut self.in_active[..], &mut self.active);
+        // `activate`, on the arrays borrowed once.
+        let mut activate = |i: usize| {
+            if let (Some(m), Some(a)) = (last_move.get_mut(i), in_active.get_mut(i)) {
+                *m = f32::INFINITY;
+                if !*a {
+                    *a = true;
+                    active.push(ElementId(i as u32));
+                }
+            }
+        };
+        for &e in &self.ws.moved {
+            let e = e as usize;
+            if let Some(&old) = self.ws.old.get(e) {
+                self.repair.note(e as u32, old);
+            }
+            activate(e);
+            let (Some(&s0), Some(&s1)) = (adj_start.get(e), adj_start.get(e + 1)) else { continue };
+            for &n in adj_nbr.get(s0 as usize..s1 as usize).unwrap_or(&[]) {
+                activate(n as usize);
             }
         }
     }
