@@ -311,9 +311,11 @@ impl Body {
     /// `(candidate, link, sponsor)` entries.
     #[inline(always)]
     fn chain_reaction_in<const MASK: u8>(&mut self, ws: &mut Workspace, r: Seeds<'_>, wide: Wide) -> Outcome {
-        // Constant widths let the row loop unroll: 4 on sheets, 6 in volumes.
+        // Constant widths let the row loop unroll: 4 on sheets, 5 on two layers joined by fibres, 6 in
+        // volumes.
         match self.width {
             4 => self.chain_reaction_rows::<MASK>(ws, r, [&mut [0; 4], &mut [0; 4]], wide),
+            5 => self.chain_reaction_rows::<MASK>(ws, r, [&mut [0; 5], &mut [0; 5]], wide),
             6 => self.chain_reaction_rows::<MASK>(ws, r, [&mut [0; 6], &mut [0; 6]], wide),
             w => {
                 let mut ends = std::mem::take(&mut ws.list_ends);
