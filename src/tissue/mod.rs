@@ -461,7 +461,8 @@ impl Tissue {
         self.repair.fit(self.body.element_count());
         let lat = self.body.lattice();
         let (adj_start, adj_nbr) = (&lat.adj_start[..], &lat.adj_nbr[..]);
-        let (last_move, in_active, active) = (&mut self.last_move[..], &mut self.in_active[..], &mut self.active);
+        let (last_move, in_active, active) =
+            (&mut self.last_move[..], &mut self.in_active[..], &mut self.active);
         // `activate`, on the arrays borrowed once.
         let mut activate = |i: usize| {
             if let (Some(m), Some(a)) = (last_move.get_mut(i), in_active.get_mut(i)) {
@@ -714,7 +715,8 @@ impl Tissue {
         let mut max_stretch2 = 0.0f32;
         for &e in &self.active {
             let e = e.index();
-            let (Some(&s0), Some(&s1), Some(&p)) = (adj_start.get(e), adj_start.get(e + 1), pos.get(e)) else {
+            let (Some(&s0), Some(&s1), Some(&p)) = (adj_start.get(e), adj_start.get(e + 1), pos.get(e))
+            else {
                 continue;
             };
             let pa = world(p);
