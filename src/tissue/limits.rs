@@ -54,9 +54,9 @@ pub const MIN_MOVES: usize = 4096;
 /// The repair's scratch, sized once per tissue (no step allocates once warmed up).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Repair {
-    /// Where each element was when the step first moved it (valid where `mark == stamp`).
-    from: Vec<[f32; 3]>,
-    mark: Vec<u32>,
+    /// Where each element was when the step first moved it, and the stamp of that step (valid where
+    /// it is the current stamp); side by side, so that noting a move touches one cache line.
+    from: Vec<([f32; 3], u32)>,
     /// The step's stamp (never 0 once a step has started).
     stamp: u32,
     /// The elements the step moved by chain reactions or direct writes, each once.
@@ -76,9 +76,8 @@ pub(crate) struct Repair {
 
 impl Repair {
     pub(crate) fn fit(&mut self, n: usize) {
-        if self.mark.len() != n {
-            self.from = vec![[0.0; 3]; n];
-            self.mark = vec![0; n];
+        if self.from.len() != n {
+            self.from = vec![([0.0; 3], 0); n];
             self.queued = vec![false; n];
             self.bounces = vec![0; n];
             self.rank = vec![0; n];
@@ -91,10 +90,10 @@ impl Repair {
     /// Notes that element `e`, at `was` before, is about to move or has moved this step.
     #[inline]
     pub(crate) fn note(&mut self, e: u32, was: [f32; 3]) {
-        let i = e as usize;
-        if i < self.mark.len() && self.mark[i] != self.stamp {
-            self.mark[i] = self.stamp;
-            self.from[i] = was;
+        if let Some(f) = self.from.get_mut(e as usize)
+            && f.1 != self.stamp
+        {
+            *f = (was, self.stamp);
             self.suspects.push(e);
         }
     }
@@ -104,7 +103,7 @@ impl Repair {
         self.suspects.clear();
         self.stamp = self.stamp.wrapping_add(1).max(1);
         if self.stamp == 1 {
-            self.mark.fill(0);
+            self.from.iter_mut().for_each(|f| f.1 = 0);
         }
         std::mem::swap(&mut self.suspects, &mut self.carry);
     }
@@ -112,7 +111,8 @@ impl Repair {
     /// How far element `i` moved this step along coordinate `k` (0 if the step did not move it).
     #[inline]
     fn moved(&self, i: usize, k: usize, p: f32) -> f32 {
-        if self.mark[i] == self.stamp { p - self.from[i][k] } else { 0.0 }
+        let (was, stamp) = self.from[i];
+        if stamp == self.stamp { p - was[k] } else { 0.0 }
     }
 }
 
@@ -152,11 +152,18 @@ impl Tissue {
             let w = self.body.width;
             for t in 0..w {
                 let y = self.body.slot_nbr[x * w + t] as usize;
-                if y == x {
-                    continue;
-                }
                 let [lo, hi] = self.body.classes[self.body.slot_class[x * w + t] as usize].bounds;
                 let (px, py) = (self.body.pos[x], self.body.pos[y]);
+                // Most links of an element hold: one branch-free test first (padding slots and broken
+                // links have infinite boxes and pass it).
+                let mut out = false;
+                for k in 0..3 {
+                    let d = px[k] - py[k];
+                    out |= (d > hi[k] + tol) | (d < lo[k] - tol);
+                }
+                if !out {
+                    continue;
+                }
                 let mut qx = px;
                 let mut qy = py;
                 for k in 0..3 {
