@@ -19,8 +19,10 @@ use dissect::simulation::{InstrumentKind, World};
 use dissect::tissue::CutDepth;
 use proptest::prelude::*;
 
-/// Tolerance on a link's distance outside its box, as a share of the element spacing (rounding).
-const SLACK: f32 = 1e-4;
+/// Tolerance on a link's distance outside its box, as a share of the element spacing: the repair's
+/// (`TOLERANCE` in `src/tissue/limits.rs`, a thousandth of the spacing) and a half of it more for
+/// rounding.
+const SLACK: f32 = 1.5e-3;
 
 fn world(nu: u32, nv: u32) -> World {
     common::meninges(nu, nv)
