@@ -197,6 +197,21 @@ impl Surface {
         if dot(n, m) < 0.0 { [-n[0], -n[1], -n[2]] } else { n }
     }
 
+    /// Whether the surface is flat (a plane or a box's top), where [`Surface::flat_to_world`] maps.
+    #[inline]
+    pub fn is_flat(&self) -> bool {
+        matches!(self, Surface::Plane { .. } | Surface::Box { .. })
+    }
+
+    /// [`Surface::to_world`] of a flat surface: its point `(u, 0, v)` plus `h` along its normal
+    /// `(0, 1, 0)` is the lattice coordinates permuted (up to the sign of a zero coordinate, so every
+    /// length between two points is the same bit for bit), without the general map's match and
+    /// products, for loops over many links.
+    #[inline]
+    pub fn flat_to_world(p: [f32; 3]) -> [f32; 3] {
+        [p[0], p[2], p[1]]
+    }
+
     /// World position of lattice coordinates `(u, v, h)`.
     #[inline]
     pub fn to_world(&self, p: [f32; 3]) -> [f32; 3] {
@@ -260,6 +275,36 @@ mod tests {
             Surface::Cylinder { radius: 0.03, length: 0.1 },
             Surface::Sphere { radius: 0.04 },
         ]
+    }
+
+    #[test]
+    fn a_flat_surface_maps_lengths_as_its_general_map_does() {
+        let flat = [
+            Surface::Plane { width: 0.1, depth: 0.08 },
+            Surface::Box { width: 0.08, depth: 0.06, height: 0.02 },
+        ];
+        let points = [
+            [0.013f32, -0.027, 0.0031],
+            [-0.041, 0.0093, -0.0007],
+            [0.0, -0.0, 0.0],
+            [0.0312, 0.0288, 0.0119],
+        ];
+        for s in flat {
+            assert!(s.is_flat());
+            for a in points {
+                for b in points {
+                    let (wa, wb) = (s.to_world(a), s.to_world(b));
+                    let (fa, fb) = (Surface::flat_to_world(a), Surface::flat_to_world(b));
+                    let d2 = |p: [f32; 3], q: [f32; 3]| {
+                        (p[0] - q[0]) * (p[0] - q[0])
+                            + (p[1] - q[1]) * (p[1] - q[1])
+                            + (p[2] - q[2]) * (p[2] - q[2])
+                    };
+                    assert_eq!(d2(wa, wb).to_bits(), d2(fa, fb).to_bits());
+                }
+            }
+        }
+        assert!(surfaces()[1..].iter().all(|s| !s.is_flat()));
     }
 
     #[test]

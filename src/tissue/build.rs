@@ -517,9 +517,7 @@ impl Tissue {
             .into_iter()
             .map(|(kind, ids)| (kind, super::link_grid::LinkGrid::new(&body, &ids, wrapped)))
             .collect();
-        let tear_links = super::TearLink::of_links(&body, &rest_len, &link_kind);
         let mut tissue = Tissue {
-            tear_links,
             kind_links,
             cut_candidates: Vec::new(),
             drift_max: 0.0,

@@ -161,12 +161,7 @@ impl Tissue {
                 let (px, py) = (self.body.pos[x], self.body.pos[y]);
                 // Most links of an element hold: one branch-free test first (padding slots and broken
                 // links have infinite boxes and pass it).
-                let mut out = false;
-                for k in 0..3 {
-                    let d = px[k] - py[k];
-                    out |= (d > hi[k] + tol) | (d < lo[k] - tol);
-                }
-                if !out {
+                if !outside(px, py, [lo, hi], tol) {
                     continue;
                 }
                 let mut qx = px;
@@ -194,8 +189,7 @@ impl Tissue {
             }
             // The layers' contact: the upper element at least `min_gap` above its partner.
             if let Some((sheet, gap)) = pair {
-                let s = sheet as usize;
-                let (l, u) = if x >= s { (x - s, x) } else { (x, x + s) };
+                let (l, u) = partners(x, sheet);
                 if u < n {
                     let (pl, pu) = (self.body.pos[l], self.body.pos[u]);
                     // `p[l] - p[u]` may be at most `-gap`.
@@ -309,22 +303,35 @@ impl Tissue {
         let (nbrs, cls) = (&body.slot_nbr[i * w..(i + 1) * w], &body.slot_class[i * w..(i + 1) * w]);
         let pi = body.pos[i];
         for (&y, &c) in nbrs.iter().zip(cls) {
-            let [lo, hi] = body.classes[c as usize].bounds;
-            let py = body.pos[y as usize];
-            for k in 0..3 {
-                let d = pi[k] - py[k];
-                if d > hi[k] + tol || d < lo[k] - tol {
-                    return true;
-                }
+            if outside(pi, body.pos[y as usize], body.classes[c as usize].bounds, tol) {
+                return true;
             }
         }
         if let Some((sheet, gap)) = pair {
-            let s = sheet as usize;
-            let (l, u) = if i >= s { (i - s, i) } else { (i, i + s) };
+            let (l, u) = partners(i, sheet);
             if let (Some(pl), Some(pu)) = (body.pos.get(l), body.pos.get(u)) {
                 return pl[2] - pu[2] + gap > tol;
             }
         }
         false
     }
+}
+
+/// Whether `p[x] - p[y]` lies more than `tol` outside the slot's bounds `[lo, hi]` in any coordinate
+/// (branch-free: most links hold; infinite bounds never count).
+#[inline(always)]
+fn outside(px: [f32; 3], py: [f32; 3], [lo, hi]: [[f32; 3]; 2], tol: f32) -> bool {
+    let mut out = false;
+    for k in 0..3 {
+        let d = px[k] - py[k];
+        out |= (d > hi[k] + tol) | (d < lo[k] - tol);
+    }
+    out
+}
+
+/// The lower and upper element of the layer pair element `i` belongs to (`sheet` elements apart).
+#[inline(always)]
+fn partners(i: usize, sheet: u32) -> (usize, usize) {
+    let s = sheet as usize;
+    if i >= s { (i - s, i) } else { (i, i + s) }
 }

@@ -68,36 +68,6 @@ impl Geometry {
 /// rounding can take).
 const NEAR: f32 = 1.0 - 1e-6;
 
-/// What the tear check reads of a link, in one place so that its scan touches one array per link
-/// rather than three: the square of its world rest length (as the check divides by it), its material
-/// (a link keeps its material; the material's tear ratio is read each check, so live tuning applies)
-/// and whether it lies in a layer (the force proxy is the layers' stretch).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct TearLink {
-    rest2: f32,
-    material: u16,
-    layer: bool,
-}
-
-impl TearLink {
-    /// Each link's entry, from its world rest length, its kind and its material in `body`.
-    pub(crate) fn of_links(body: &Body, rest_len: &[f32], kind: &[LinkKind]) -> Vec<TearLink> {
-        rest_len
-            .iter()
-            .zip(kind)
-            .enumerate()
-            .map(|(l, (&rest, kind))| {
-                let rest = rest.max(f32::MIN_POSITIVE);
-                TearLink {
-                    rest2: rest * rest,
-                    material: body.link_material(LinkId(l as u32)).map_or(u16::MAX, |m| m.0),
-                    layer: matches!(kind, LinkKind::Layer(_)),
-                }
-            })
-            .collect()
-    }
-}
-
 /// What a link is part of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LinkKind {
@@ -194,8 +164,6 @@ pub struct Tissue {
     pub(crate) tear_hits: Vec<LinkId>,
     /// World rest length of each link, metres (for stretch and tearing).
     pub(crate) rest_len: Vec<f32>,
-    /// What the tear check reads of each link, packed in one place (see [`TearLink`]).
-    pub(crate) tear_links: Vec<TearLink>,
     /// Elements per layer sheet (`nu × nv`) for layered tissue; pairs across layers differ by this.
     pub(crate) sheet: u32,
     pub(crate) min_gap: f32,
@@ -676,13 +644,14 @@ impl Tissue {
         let mut hits = std::mem::take(&mut self.tear_hits);
         hits.clear();
         let geometry = self.geometry;
-        // A plane's world is its lattice with the axes permuted, which leaves lengths alone.
-        let max_stretch2 =
-            if matches!(geometry, Geometry::Surface(Surface::Plane { .. } | Surface::Box { .. })) {
-                self.scan_stretch(&tear2, &mut hits, |p| Vec3::new(p[0], p[2], p[1]))
-            } else {
-                self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(geometry.to_world(p)))
-            };
+        // A flat surface's world is its lattice with the axes permuted: the same lengths, without the
+        // surface's general map per link end.
+        let max_stretch2 = match geometry {
+            Geometry::Surface(s) if s.is_flat() => {
+                self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(Surface::flat_to_world(p)))
+            }
+            _ => self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(geometry.to_world(p))),
+        };
         let mut torn = 0;
         for &l in &hits {
             if self.break_link(l, BreakReason::Tear) {
@@ -710,8 +679,9 @@ impl Tissue {
     ) -> f32 {
         let lat = self.body.lattice();
         let (adj_start, adj_link, adj_nbr) = (&lat.adj_start[..], &lat.adj_link[..], &lat.adj_nbr[..]);
-        let (pos, state) = (&self.body.pos[..], &self.body.link_state[..]);
-        let links = &self.tear_links[..];
+        let (pos, state, material) =
+            (&self.body.pos[..], &self.body.link_state[..], &self.body.link_material[..]);
+        let (rest_len, kind) = (&self.rest_len[..], &self.link_kind[..]);
         let mut max_stretch2 = 0.0f32;
         for &e in &self.active {
             let e = e.index();
@@ -730,9 +700,12 @@ impl Tissue {
                     continue;
                 }
                 let q = pos[adj_nbr[s] as usize];
-                let TearLink { rest2, material, layer } = links[l];
+                let rest = rest_len[l].max(f32::MIN_POSITIVE);
+                let rest2 = rest * rest;
                 let d2 = world(q).distance_squared(pa);
-                let ratio2 = tear2.get(usize::from(material)).copied().flatten().unwrap_or(f32::INFINITY);
+                // The force proxy is the layers' stretch: fibres are meant to stretch before they are cut.
+                let layer = matches!(kind[l], LinkKind::Layer(_));
+                let ratio2 = tear2.get(material[l].index()).copied().flatten().unwrap_or(f32::INFINITY);
                 // Most links are neither the largest stretch so far nor past their tear ratio: a
                 // multiplication tells, a little on the safe side (`NEAR` lets through every link whose
                 // quotient below could round above the bar), so the division runs only near the bar

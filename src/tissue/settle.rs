@@ -18,7 +18,8 @@ pub const SETTLED: f32 = 1e-7;
 /// sheet a lift disturbs (about 30 ns per update on the development machine), and the region, kept
 /// until it converges, goes on relaxing over the next steps: the chain reaction and the limits' repair
 /// after contact (`limits.rs`) put every element within its links' limits, so an element not reached
-/// this step is only less smooth, never out of its limits. Counted in updates, not time, so that runs stay bit for bit reproducible.
+/// this step is only less smooth, never out of its limits. Counted in updates, not time, so that runs
+/// stay bit for bit reproducible.
 pub const REGION_UPDATES: usize = 1 << 13;
 
 /// Fewest element updates one step's relaxation makes: a step whose chain reactions moved many
