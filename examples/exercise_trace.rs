@@ -4,6 +4,12 @@
 //! links within their limits), for finding which steps of a session cost what:
 //! `target/release/examples/exercise_trace 256 192 > trace.tsv`; another layered scene and script
 //! after the resolution: `exercise_trace 128 96 scenes/durotomy.ron scenes/scripts/durotomy_careful.ron`.
+//!
+//! To profile a window of steps (the careful script's final lift at 256 × 192 is steps 1370 to
+//! 1470): `TRACE_WINDOW=1370,1470` runs those steps through `window_step`, which a profiler can
+//! single out (`valgrind --tool=callgrind --toggle-collect='*window_step*'`), and with
+//! `PERF_CTL=FIFO` also writes `enable` and `disable` to that control FIFO around them
+//! (`perf record -D -1 --control fifo:FIFO`).
 use std::time::Instant;
 
 use dissect::runner::Player;
@@ -35,13 +41,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "step\ttotal_us\tinput\tchain\tnormal\trelax\tcontact\tcuts\tforces\tmoved_chain\tmoved_normal\tsweeps\tactive\twall_us\tcpu_us\trepairs"
     );
+    let window: Vec<u64> = std::env::var("TRACE_WINDOW")
+        .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .unwrap_or_default();
+    let window = match window[..] {
+        [a, b] => a..b,
+        _ => 0..0,
+    };
+    let fifo = std::env::var("PERF_CTL").ok();
     loop {
+        let next = world.step_count() + 1;
+        if let Some(f) = &fifo
+            && (next == window.start || next == window.end)
+        {
+            let say = if next == window.start { "enable\n" } else { "disable\n" };
+            std::fs::write(f, say)?;
+        }
         player.feed(&mut world);
         if player.finished() && world.pending().is_empty() {
             break;
         }
         let (t, cpu) = (Instant::now(), cpu_time::ThreadTime::now());
-        let c = world.step();
+        let c = if window.contains(&next) { window_step(&mut world) } else { world.step() };
         let wall = t.elapsed().as_secs_f32() * 1e6;
         // The thread's own CPU time: what the step costs without the time other processes took
         // the core (a busy machine's preemptions otherwise make the p99).
@@ -62,4 +83,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     Ok(())
+}
+
+/// One step of the profiled window (kept out of line so that a profiler can tell it apart).
+#[inline(never)]
+fn window_step(world: &mut dissect::simulation::World) -> dissect::simulation::StepCounters {
+    world.step()
 }

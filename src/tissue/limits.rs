@@ -59,15 +59,27 @@ pub const MIN_MOVES: usize = 4096;
 /// The repair's scratch, sized once per tissue (no step allocates once warmed up).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Repair {
-    /// Where each element was when the step first moved it, and the stamp of that step (valid where
-    /// it is the current stamp); side by side, so that noting a move touches one cache line.
-    from: Vec<([f32; 3], u32)>,
+    /// Where each element was when the step first moved it (valid where `stamps` holds the current
+    /// stamp).
+    from: Vec<[f32; 3]>,
+    /// The stamp of the step that last moved each element: dense (4 bytes an element), because every
+    /// move of a step reads it and a lifting step moves tens of thousands of elements in the chain
+    /// reaction's order, not the memory's.
+    stamps: Vec<u32>,
     /// The step's stamp (never 0 once a step has started).
     stamp: u32,
     /// The elements the step moved by chain reactions or direct writes, each once.
     pub(crate) suspects: Vec<u32>,
     /// Elements left with a link outside its box at the last repair (checked again next step).
     carry: Vec<u32>,
+    /// How many of `suspects` were carried over from the last repair (they come first).
+    carried: usize,
+    /// Contact wrote an element's position directly this step (its neighbours need not be in the
+    /// disturbed region).
+    pub(crate) direct: bool,
+    /// Contact found layers closer than their gap this step (its moves may undo the gaps it checked
+    /// earlier, and it leaves pairs with both ends fixed as they are).
+    pub(crate) contact: bool,
     queue: Vec<u32>,
     queued: Vec<bool>,
     /// Times each element was moved by the current repair, and its rank once it has bounced
@@ -82,23 +94,28 @@ pub(crate) struct Repair {
 impl Repair {
     pub(crate) fn fit(&mut self, n: usize) {
         if self.from.len() != n {
-            self.from = vec![([0.0; 3], 0); n];
+            self.from = vec![[0.0; 3]; n];
+            self.stamps = vec![0; n];
             self.queued = vec![false; n];
             self.bounces = vec![0; n];
             self.rank = vec![0; n];
             self.stamp = 1;
             self.suspects.clear();
             self.carry.clear();
+            self.carried = 0;
         }
     }
 
     /// Notes that element `e`, at `was` before, is about to move or has moved this step.
     #[inline]
     pub(crate) fn note(&mut self, e: u32, was: [f32; 3]) {
-        if let Some(f) = self.from.get_mut(e as usize)
-            && f.1 != self.stamp
+        if let Some(s) = self.stamps.get_mut(e as usize)
+            && *s != self.stamp
         {
-            *f = (was, self.stamp);
+            *s = self.stamp;
+            if let Some(f) = self.from.get_mut(e as usize) {
+                *f = was;
+            }
             self.suspects.push(e);
         }
     }
@@ -108,16 +125,18 @@ impl Repair {
         self.suspects.clear();
         self.stamp = self.stamp.wrapping_add(1).max(1);
         if self.stamp == 1 {
-            self.from.iter_mut().for_each(|f| f.1 = 0);
+            self.stamps.iter_mut().for_each(|s| *s = 0);
         }
         std::mem::swap(&mut self.suspects, &mut self.carry);
+        self.carried = self.suspects.len();
+        self.direct = false;
+        self.contact = false;
     }
 
     /// How far element `i` moved this step along coordinate `k` (0 if the step did not move it).
     #[inline]
     fn moved(&self, i: usize, k: usize, p: f32) -> f32 {
-        let (was, stamp) = self.from[i];
-        if stamp == self.stamp { p - was[k] } else { 0.0 }
+        if self.stamps[i] == self.stamp { p - self.from[i][k] } else { 0.0 }
     }
 }
 
@@ -128,6 +147,7 @@ impl Tissue {
         if self.is_fem() {
             return 0;
         }
+        self.take_moved();
         let n = self.body.element_count();
         let mut r = std::mem::take(&mut self.repair);
         r.fit(n);
@@ -139,8 +159,32 @@ impl Tissue {
         r.next_rank = u32::MAX - 1;
         r.carry.clear();
         // Only the elements with a link outside its box start the queue; whatever the repair moves
-        // joins it.
-        for k in 0..r.suspects.len() {
+        // joins it. Most steps have none. That is found by the tear check's scan of the region, in
+        // memory order (the region holds every element the step moved and their neighbours), which
+        // also tests each link there against its box; the layers' gaps hold if contact found none
+        // short (it has just checked every element of the region); the last repair's leftovers are
+        // checked on their own; and a step in which contact found a gap short (it may have moved
+        // elements, and where it wrote them directly the region may lack their neighbours) takes
+        // the full path. The scan's tears stand if the repair moves nothing.
+        let boxes = super::BoxCheck { tol, stamps: &r.stamps, stamp: r.stamp };
+        let (max2, found) = self.scan_tears(Some(boxes));
+        self.tear_scan = Some(((self.body.motion(), self.body.revision()), max2));
+        let any = found
+            || r.direct
+            || (r.contact && pair.is_some())
+            || r.suspects[..r.carried.min(r.suspects.len())]
+                .iter()
+                .any(|&e| self.violates(e as usize, tol, pair));
+        // The plain path beside the scan: every suspect's links, one by one (in debug builds, so
+        // that every test's steps compare the two).
+        #[cfg(debug_assertions)]
+        {
+            let plain = r.suspects.iter().any(|&e| self.violates(e as usize, tol, pair));
+            debug_assert!(!plain || any, "the tear scan missed a link out of its box");
+            debug_assert!(!found || plain, "the tear scan found a link out of its box the suspects lack");
+        }
+        let seeds = if any { r.suspects.len() } else { 0 };
+        for k in 0..seeds {
             let e = r.suspects[k];
             if !r.queued[e as usize] && self.violates(e as usize, tol, pair) {
                 r.queued[e as usize] = true;
@@ -320,7 +364,7 @@ impl Tissue {
 /// Whether `p[x] - p[y]` lies more than `tol` outside the slot's bounds `[lo, hi]` in any coordinate
 /// (branch-free: most links hold; infinite bounds never count).
 #[inline(always)]
-fn outside(px: [f32; 3], py: [f32; 3], [lo, hi]: [[f32; 3]; 2], tol: f32) -> bool {
+pub(crate) fn outside(px: [f32; 3], py: [f32; 3], [lo, hi]: [[f32; 3]; 2], tol: f32) -> bool {
     let mut out = false;
     for k in 0..3 {
         let d = px[k] - py[k];
@@ -331,7 +375,7 @@ fn outside(px: [f32; 3], py: [f32; 3], [lo, hi]: [[f32; 3]; 2], tol: f32) -> boo
 
 /// The lower and upper element of the layer pair element `i` belongs to (`sheet` elements apart).
 #[inline(always)]
-fn partners(i: usize, sheet: u32) -> (usize, usize) {
+pub(crate) fn partners(i: usize, sheet: u32) -> (usize, usize) {
     let s = sheet as usize;
     if i >= s { (i - s, i) } else { (i, i + s) }
 }

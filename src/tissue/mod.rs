@@ -68,6 +68,17 @@ impl Geometry {
 /// rounding can take).
 const NEAR: f32 = 1.0 - 1e-6;
 
+/// What the tear scan needs to also test links against their boxes (see `limits.rs`): the tolerance,
+/// and which elements the step moved (those whose stamp is `stamp`).
+#[derive(Clone, Copy)]
+pub(crate) struct BoxCheck<'a> {
+    pub(crate) tol: f32,
+    pub(crate) stamps: &'a [u32],
+    pub(crate) stamp: u32,
+}
+
+const NO_BOXES: BoxCheck<'static> = BoxCheck { tol: 0.0, stamps: &[], stamp: 0 };
+
 /// What a link is part of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LinkKind {
@@ -162,6 +173,12 @@ pub struct Tissue {
     pub(crate) tear_scratch: Vec<Option<f32>>,
     /// The links a tear check found past their tear ratio, broken after the scan.
     pub(crate) tear_hits: Vec<LinkId>,
+    /// The limits' repair's tear scan: the body's motion and revision then, and the largest squared
+    /// stretch it found (`tear_hits` holds its hits); [`Tissue::apply_tears`] takes it while both
+    /// are unchanged.
+    pub(crate) tear_scan: Option<((u64, u64), f32)>,
+    /// The slot classes' boxes widened by the repair's tolerance, for the tear scan's box test.
+    pub(crate) wide_scratch: Vec<[[f32; 3]; 2]>,
     /// World rest length of each link, metres (for stretch and tearing).
     pub(crate) rest_len: Vec<f32>,
     /// Elements per layer sheet (`nu × nv`) for layered tissue; pairs across layers differ by this.
@@ -176,6 +193,12 @@ pub struct Tissue {
     pub(crate) region_scratch: Vec<ElementId>,
     /// A bit per element, for putting the region in order.
     pub(crate) region_bits: Vec<u64>,
+    /// A bit per element the step's chain reactions moved and the region has not taken in yet: they
+    /// and their neighbours join it in memory order ([`Tissue::take_moved`]), not in the order a
+    /// reaction reached them (a lifting step moves tens of thousands).
+    pub(crate) moved_bits: Vec<u64>,
+    /// Whether `moved_bits` holds any bit.
+    pub(crate) moved_pending: bool,
     /// Where the next partial relaxation sweep of a large region starts (an element id; see
     /// `settle::REGION_UPDATES`).
     pub(crate) relax_cursor: u32,
@@ -424,9 +447,34 @@ impl Tissue {
         }
     }
 
+    /// Notes the elements the last chain reaction moved (for the limits' repair, in the reaction's
+    /// order) and marks them to join the disturbed region with their neighbours.
     fn activate_moved(&mut self) {
         self.step_moved += self.ws.moved.len();
-        self.repair.fit(self.body.element_count());
+        let n = self.body.element_count();
+        self.repair.fit(n);
+        if self.moved_bits.len() != n.div_ceil(64) {
+            self.moved_bits = vec![0; n.div_ceil(64)];
+        }
+        for &e in &self.ws.moved {
+            let e = e as usize;
+            if let Some(&old) = self.ws.old.get(e) {
+                self.repair.note(e as u32, old);
+            }
+            if let Some(w) = self.moved_bits.get_mut(e / 64) {
+                *w |= 1 << (e % 64);
+                self.moved_pending = true;
+            }
+        }
+    }
+
+    /// Puts the elements chain reactions moved since the last call, and their neighbours, into the
+    /// disturbed region (in memory order: the same region, read and written in order).
+    pub(crate) fn take_moved(&mut self) {
+        if !self.moved_pending {
+            return;
+        }
+        self.moved_pending = false;
         let lat = self.body.lattice();
         let (adj_start, adj_nbr) = (&lat.adj_start[..], &lat.adj_nbr[..]);
         let (last_move, in_active, active) =
@@ -441,15 +489,16 @@ impl Tissue {
                 }
             }
         };
-        for &e in &self.ws.moved {
-            let e = e as usize;
-            if let Some(&old) = self.ws.old.get(e) {
-                self.repair.note(e as u32, old);
-            }
-            activate(e);
-            let (Some(&s0), Some(&s1)) = (adj_start.get(e), adj_start.get(e + 1)) else { continue };
-            for &n in adj_nbr.get(s0 as usize..s1 as usize).unwrap_or(&[]) {
-                activate(n as usize);
+        for (w, word) in self.moved_bits.iter_mut().enumerate() {
+            let mut x = std::mem::take(word);
+            while x != 0 {
+                let e = w * 64 + x.trailing_zeros() as usize;
+                x &= x - 1;
+                activate(e);
+                let (Some(&s0), Some(&s1)) = (adj_start.get(e), adj_start.get(e + 1)) else { continue };
+                for &n in adj_nbr.get(s0 as usize..s1 as usize).unwrap_or(&[]) {
+                    activate(n as usize);
+                }
             }
         }
     }
@@ -526,6 +575,7 @@ impl Tissue {
     /// Relaxes the disturbed region within `budget`. The region is kept for the step's contact and
     /// tear checks, which look only there; [`Tissue::end_step`] forgets it once it has converged.
     pub fn relax(&mut self, budget: RelaxBudget) -> crate::chainmail::RelaxReport {
+        self.take_moved();
         if self.active.is_empty() || self.is_fem() {
             self.settled = true;
             return crate::chainmail::RelaxReport { converged: true, ..Default::default() };
@@ -538,6 +588,7 @@ impl Tissue {
     /// Closes a step: forgets the disturbed region if the step's relaxation converged and contact
     /// moved nothing afterwards; otherwise shrinks it to what still moves (see `settle.rs`).
     pub fn end_step(&mut self) {
+        self.take_moved();
         if matches!(self.geometry, Geometry::Surface(_)) {
             self.drift(); // before the region forgets what moved
         }
@@ -566,6 +617,7 @@ impl Tissue {
     /// hold; where pins or holds cut those short, the rest is written directly, so the layers never
     /// cross. Returns how many pairs were corrected.
     pub fn enforce_contact(&mut self) -> u32 {
+        self.take_moved();
         if self.layers.len() != 2 || !matches!(self.geometry, Geometry::Surface(_)) {
             return 0;
         }
@@ -582,6 +634,9 @@ impl Tissue {
             if gap >= self.min_gap {
                 continue;
             }
+            // Whatever contact does with the pair (even nothing, both ends fixed), the limits' repair
+            // looks at the step's gaps itself.
+            self.repair.contact = true;
             let short = self.min_gap - gap;
             let free_l = !(self.body.is_pinned(lower) || self.body.is_held(lower));
             let free_u = !(self.body.is_pinned(upper) || self.body.is_held(upper));
@@ -618,6 +673,7 @@ impl Tissue {
                 self.repair.fit(self.body.element_count());
                 self.repair.note(lower.0, pl);
                 self.repair.note(upper.0, pu);
+                self.repair.direct = true;
                 let _ = self.body.set_position(lower, [pl[0], pl[1], pl[2] + dl]);
                 let _ = self.body.set_position(upper, [pu[0], pu[1], pu[2] + du]);
             }
@@ -634,24 +690,18 @@ impl Tissue {
     /// Breaks every link near the disturbed region stretched past its material's tear ratio (world
     /// length over rest length), counting them as torn. Also records the largest stretch seen.
     pub fn apply_tears(&mut self) -> u32 {
+        self.take_moved();
         if self.is_fem() {
             return 0;
         }
-        // Each material's tear ratio, squared (lengths are compared squared: no root per link).
-        let mut tear2 = std::mem::take(&mut self.tear_scratch);
-        tear2.clear();
-        tear2.extend(self.body.materials().iter().map(|m| m.tear_ratio.map(|r| r * r)));
-        let mut hits = std::mem::take(&mut self.tear_hits);
-        hits.clear();
-        let geometry = self.geometry;
-        // A flat surface's world is its lattice with the axes permuted: the same lengths, without the
-        // surface's general map per link end.
-        let max_stretch2 = match geometry {
-            Geometry::Surface(s) if s.is_flat() => {
-                self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(Surface::flat_to_world(p)))
-            }
-            _ => self.scan_stretch(&tear2, &mut hits, |p| Vec3::from(geometry.to_world(p))),
+        // The limits' repair scans the region for tears as it looks for links out of their boxes
+        // (`limits.rs`): its findings stand if nothing has moved or been cut since.
+        let key = (self.body.motion(), self.body.revision());
+        let max_stretch2 = match self.tear_scan.take() {
+            Some((k, m)) if k == key => m,
+            _ => self.scan_tears(None).0,
         };
+        let hits = std::mem::take(&mut self.tear_hits);
         let mut torn = 0;
         for &l in &hits {
             if self.break_link(l, BreakReason::Tear) {
@@ -661,27 +711,75 @@ impl Tissue {
         if !self.active.is_empty() {
             self.max_stretch = max_stretch2.sqrt();
         }
-        self.tear_scratch = tear2;
         self.tear_hits = hits;
         torn
+    }
+
+    /// The tear check's scan of the disturbed region (see [`Tissue::scan_region`]): fills
+    /// `tear_hits` and returns the largest squared stretch of the layers' links, and with `boxes`
+    /// whether a link the step moved lies outside its box.
+    pub(crate) fn scan_tears(&mut self, boxes: Option<BoxCheck<'_>>) -> (f32, bool) {
+        // Each material's tear ratio, squared (lengths are compared squared: no root per link).
+        let mut tear2 = std::mem::take(&mut self.tear_scratch);
+        tear2.clear();
+        tear2.extend(self.body.materials().iter().map(|m| m.tear_ratio.map(|r| r * r)));
+        let mut hits = std::mem::take(&mut self.tear_hits);
+        hits.clear();
+        // Each slot class's box widened by the tolerance (a handful of classes).
+        let mut wide = std::mem::take(&mut self.wide_scratch);
+        wide.clear();
+        if let Some(b) = boxes {
+            wide.extend(self.body.classes.iter().map(|c| {
+                let [lo, hi] = c.bounds;
+                [lo.map(|x| x - b.tol), hi.map(|x| x + b.tol)]
+            }));
+        }
+        let geometry = self.geometry;
+        // A flat surface's world is its lattice with the axes permuted: the same lengths, without the
+        // surface's general map per link end.
+        let flat = |p| Vec3::from(Surface::flat_to_world(p));
+        let general = |p| Vec3::from(geometry.to_world(p));
+        let mut out = false;
+        let max2 = match (geometry, boxes) {
+            (Geometry::Surface(s), None) if s.is_flat() => {
+                self.scan_region::<false>(&tear2, &mut hits, flat, &NO_BOXES, &wide, &mut out)
+            }
+            (Geometry::Surface(s), Some(b)) if s.is_flat() => {
+                self.scan_region::<true>(&tear2, &mut hits, flat, &b, &wide, &mut out)
+            }
+            (_, None) => self.scan_region::<false>(&tear2, &mut hits, general, &NO_BOXES, &wide, &mut out),
+            (_, Some(b)) => self.scan_region::<true>(&tear2, &mut hits, general, &b, &wide, &mut out),
+        };
+        self.tear_scratch = tear2;
+        self.tear_hits = hits;
+        self.wide_scratch = wide;
+        (max2, out)
     }
 
     /// The tear check's scan of the disturbed region: each intact link with an end there, from its
     /// `a` end, in the region's order; links past their material's tear ratio go to `hits` (in the
     /// order met). Returns the largest squared stretch of the layers' links. `world` maps lattice
-    /// coordinates to the world.
+    /// coordinates to the world. With `BOXES`, `out` is set where a link with an end the step moved
+    /// lies more than the tolerance outside its box (lattice coordinates): what the limits' repair
+    /// would find, but for the layers' gaps, which contact has just checked.
     #[inline(always)]
-    fn scan_stretch(
+    #[allow(clippy::too_many_arguments)]
+    fn scan_region<const BOXES: bool>(
         &self,
         tear2: &[Option<f32>],
         hits: &mut Vec<LinkId>,
         world: impl Fn([f32; 3]) -> Vec3,
+        boxes: &BoxCheck<'_>,
+        wide: &[[[f32; 3]; 2]],
+        out: &mut bool,
     ) -> f32 {
         let lat = self.body.lattice();
         let (adj_start, adj_link, adj_nbr) = (&lat.adj_start[..], &lat.adj_link[..], &lat.adj_nbr[..]);
         let (pos, state, material) =
             (&self.body.pos[..], &self.body.link_state[..], &self.body.link_material[..]);
         let (rest_len, kind) = (&self.rest_len[..], &self.link_kind[..]);
+        let (w, slot_class) = (self.body.width, &self.body.slot_class[..]);
+        let moved = |i: usize| boxes.stamps.get(i) == Some(&boxes.stamp);
         let mut max_stretch2 = 0.0f32;
         for &e in &self.active {
             let e = e.index();
@@ -699,7 +797,17 @@ impl Tissue {
                 if state[l] != crate::chainmail::INTACT {
                     continue;
                 }
-                let q = pos[adj_nbr[s] as usize];
+                let y = adj_nbr[s] as usize;
+                let q = pos[y];
+                if BOXES {
+                    // The slot's box widened by the tolerance, per class (`wide`).
+                    let [lo, hi] = wide[slot_class[e * w + s - s0 as usize] as usize];
+                    let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+                    let outside = (d[0] > hi[0]) | (d[0] < lo[0]) | (d[1] > hi[1]) | (d[1] < lo[1]);
+                    if (outside | (d[2] > hi[2]) | (d[2] < lo[2])) && (moved(e) || moved(y)) {
+                        *out = true;
+                    }
+                }
                 let rest = rest_len[l].max(f32::MIN_POSITIVE);
                 let rest2 = rest * rest;
                 let d2 = world(q).distance_squared(pa);
