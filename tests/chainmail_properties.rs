@@ -2,6 +2,8 @@
 //! deformation each intact link between a moved element and its sponsor holds its limits, no element
 //! moved twice, nothing is NaN, pinned elements are untouched, and the same moves give the same bits.
 
+mod common;
+
 use std::collections::HashSet;
 
 use dissect::chainmail::{
@@ -100,7 +102,7 @@ fn run(c: &Case) -> Result<Vec<[f32; 3]>, TestCaseError> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(200))]
+    #![proptest_config(ProptestConfig::with_cases(common::cases(200)))]
     #[test]
     fn deformations_keep_the_invariants(c in case()) {
         let first = run(&c)?;

@@ -6,6 +6,8 @@
 //! and two materials, the engine must give the same positions (compared with `==`), the same moved
 //! elements in the same order, and the same sponsors.
 
+mod common;
+
 use dissect::chainmail::{
     Body, BreakReason, ElementId, GridSpec, Lattice, LinkId, LinkSpec, Material, Pass, RelaxBudget,
     RelaxRegion, SimdLevel, Workspace,
@@ -424,7 +426,7 @@ fn largest_gap(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
 const LEVELS: [SimdLevel; 3] = [SimdLevel::Avx512, SimdLevel::Avx2, SimdLevel::Scalar];
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(300))]
+    #![proptest_config(ProptestConfig::with_cases(common::cases(300)))]
     #[test]
     fn engine_matches_the_reference(c in case(), level in 0..LEVELS.len()) {
         let mut body = build(&c);
@@ -503,7 +505,7 @@ fn without_grid(grid: &Lattice) -> Lattice {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(60))]
+    #![proptest_config(ProptestConfig::with_cases(common::cases(60)))]
     /// Whole-body sweeps on grids take the stencil fast path; they must give what the generic path
     /// gives on the same links, with pins, holds, cuts, two materials and wrapped rows. Not bit for
     /// bit: the fast path takes the rest offsets of a uniform grid as cancelling and a relative

@@ -69,7 +69,7 @@ fn worst_violation(world: &World) -> (f32, u32) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(12))]
+    #![proptest_config(ProptestConfig::with_cases(common::cases(12)))]
     #[test]
     fn no_intact_link_leaves_its_limits(acts in proptest::collection::vec((act(), 1u8..30), 1..30)) {
         let mut world = world(40, 30);

@@ -64,7 +64,7 @@ fn run(commands: &[(Command, u8)]) -> Result<Vec<[f32; 3]>, TestCaseError> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(24))]
+    #![proptest_config(ProptestConfig::with_cases(common::cases(24)))]
     #[test]
     fn random_sessions_stay_sane(commands in proptest::collection::vec((command(), 1u8..40), 50..120)) {
         let a = run(&commands)?;

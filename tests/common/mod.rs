@@ -57,3 +57,9 @@ pub fn meninges(nu: u32, nv: u32) -> World {
     }
     scene.build_world(false).expect("world")
 }
+
+/// How many cases a property test runs: `PROPTEST_CASES` when set (for long runs before landing:
+/// `ProptestConfig::with_cases` alone ignores it), else the test's own `default`.
+pub fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(default)
+}
