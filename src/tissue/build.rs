@@ -525,6 +525,8 @@ impl Tissue {
             tear_scratch: Vec::new(),
             tear_hits: Vec::new(),
             tear_scan: None,
+            drift_scan: None,
+            scan_keep: Vec::with_capacity(n),
             wide_scratch: Vec::new(),
             ws: Workspace::new(&body),
             extent_lo,

@@ -79,6 +79,18 @@ pub(crate) struct BoxCheck<'a> {
 
 const NO_BOXES: BoxCheck<'static> = BoxCheck { tol: 0.0, stamps: &[], stamp: 0 };
 
+/// What the limits' repair's scan of the region finds besides tears (see [`Tissue::scan_region`]).
+#[derive(Default)]
+struct ScanFound<'a> {
+    /// A link the step moved lies outside its box.
+    outside: bool,
+    /// The largest of `|du|`, `|dv|` from rest over the region (see `Tissue::drift`).
+    drift: f32,
+    /// The region's elements that still move or have a neighbour that does (see
+    /// `Tissue::prune_region`), in the region's order.
+    keep: Option<&'a mut Vec<ElementId>>,
+}
+
 /// What a link is part of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LinkKind {
@@ -177,6 +189,11 @@ pub struct Tissue {
     /// stretch it found (`tear_hits` holds its hits); [`Tissue::apply_tears`] takes it while both
     /// are unchanged.
     pub(crate) tear_scan: Option<((u64, u64), f32)>,
+    /// The same scan's key and the region's drift (see `Tissue::drift`); with it `scan_keep` holds
+    /// what the region keeps at the end of the step (see `Tissue::prune_region`), both valid while
+    /// the body's motion and revision are unchanged.
+    pub(crate) drift_scan: Option<((u64, u64), f32)>,
+    pub(crate) scan_keep: Vec<ElementId>,
     /// The slot classes' boxes widened by the repair's tolerance, for the tear scan's box test.
     pub(crate) wide_scratch: Vec<[[f32; 3]; 2]>,
     /// World rest length of each link, metres (for stretch and tearing).
@@ -603,6 +620,7 @@ impl Tissue {
             self.prune_region();
         }
         self.settled = false;
+        self.drift_scan = None;
     }
 
     /// Relaxes the whole body within `budget` (for spare time, and for tests).
@@ -719,6 +737,8 @@ impl Tissue {
     /// `tear_hits` and returns the largest squared stretch of the layers' links, and with `boxes`
     /// whether a link the step moved lies outside its box.
     pub(crate) fn scan_tears(&mut self, boxes: Option<BoxCheck<'_>>) -> (f32, bool) {
+        let mut keep = std::mem::take(&mut self.scan_keep);
+        keep.clear();
         // Each material's tear ratio, squared (lengths are compared squared: no root per link).
         let mut tear2 = std::mem::take(&mut self.tear_scratch);
         tear2.clear();
@@ -739,7 +759,7 @@ impl Tissue {
         // surface's general map per link end.
         let flat = |p| Vec3::from(Surface::flat_to_world(p));
         let general = |p| Vec3::from(geometry.to_world(p));
-        let mut out = false;
+        let mut out = ScanFound { keep: boxes.is_some().then_some(&mut keep), ..Default::default() };
         let max2 = match (geometry, boxes) {
             (Geometry::Surface(s), None) if s.is_flat() => {
                 self.scan_region::<false>(&tear2, &mut hits, flat, &NO_BOXES, &wide, &mut out)
@@ -750,10 +770,14 @@ impl Tissue {
             (_, None) => self.scan_region::<false>(&tear2, &mut hits, general, &NO_BOXES, &wide, &mut out),
             (_, Some(b)) => self.scan_region::<true>(&tear2, &mut hits, general, &b, &wide, &mut out),
         };
+        let (outside, drift) = (out.outside, out.drift);
         self.tear_scratch = tear2;
         self.tear_hits = hits;
         self.wide_scratch = wide;
-        (max2, out)
+        self.scan_keep = keep;
+        let key = (self.body.motion(), self.body.revision());
+        self.drift_scan = boxes.map(|_| (key, drift));
+        (max2, outside)
     }
 
     /// The tear check's scan of the disturbed region: each intact link with an end there, from its
@@ -761,7 +785,9 @@ impl Tissue {
     /// order met). Returns the largest squared stretch of the layers' links. `world` maps lattice
     /// coordinates to the world. With `BOXES`, `out` is set where a link with an end the step moved
     /// lies more than the tolerance outside its box (lattice coordinates): what the limits' repair
-    /// would find, but for the layers' gaps, which contact has just checked.
+    /// would find, but for the layers' gaps, which contact has just checked; and it gathers the
+    /// region's drift and the elements the region keeps at the end of the step, which read the same
+    /// elements and neighbours.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn scan_region<const BOXES: bool>(
@@ -771,7 +797,7 @@ impl Tissue {
         world: impl Fn([f32; 3]) -> Vec3,
         boxes: &BoxCheck<'_>,
         wide: &[[[f32; 3]; 2]],
-        out: &mut bool,
+        out: &mut ScanFound<'_>,
     ) -> f32 {
         let lat = self.body.lattice();
         let (adj_start, adj_link, adj_nbr) = (&lat.adj_start[..], &lat.adj_link[..], &lat.adj_nbr[..]);
@@ -780,16 +806,27 @@ impl Tissue {
         let (rest_len, kind) = (&self.rest_len[..], &self.link_kind[..]);
         let (w, slot_class) = (self.body.width, &self.body.slot_class[..]);
         let moved = |i: usize| boxes.stamps.get(i) == Some(&boxes.stamp);
+        let (rest_pos, last_move) = (lat.rest_positions(), &self.last_move[..]);
+        let moving = |i: usize| last_move.get(i).is_some_and(|&m| m > settle::SETTLED);
         let mut max_stretch2 = 0.0f32;
-        for &e in &self.active {
-            let e = e.index();
+        for &id in &self.active {
+            let e = id.index();
             let (Some(&s0), Some(&s1), Some(&p)) = (adj_start.get(e), adj_start.get(e + 1), pos.get(e))
             else {
                 continue;
             };
+            // The drift and what the region keeps (`Tissue::drift`, `Tissue::prune_region`).
+            let mut keep = false;
+            if BOXES && let Some(r) = rest_pos.get(e) {
+                out.drift = out.drift.max((p[0] - r[0]).abs().max((p[1] - r[1]).abs()));
+                keep = moving(e);
+            }
             let pa = world(p);
             for s in s0 as usize..s1 as usize {
                 let raw = adj_link[s];
+                if BOXES && !keep {
+                    keep = moving(adj_nbr[s] as usize);
+                }
                 if raw & crate::chainmail::SIDE_B_BIT != 0 {
                     continue; // each link is checked from its `a` end only
                 }
@@ -805,7 +842,7 @@ impl Tissue {
                     let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
                     let outside = (d[0] > hi[0]) | (d[0] < lo[0]) | (d[1] > hi[1]) | (d[1] < lo[1]);
                     if (outside | (d[2] > hi[2]) | (d[2] < lo[2])) && (moved(e) || moved(y)) {
-                        *out = true;
+                        out.outside = true;
                     }
                 }
                 let rest = rest_len[l].max(f32::MIN_POSITIVE);
@@ -829,6 +866,9 @@ impl Tissue {
                         hits.push(LinkId(raw));
                     }
                 }
+            }
+            if keep && let Some(k) = out.keep.as_deref_mut() {
+                k.push(id);
             }
         }
         max_stretch2

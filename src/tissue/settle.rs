@@ -109,15 +109,28 @@ impl Tissue {
     pub(crate) fn prune_region(&mut self) {
         let mut keep = std::mem::take(&mut self.region_scratch);
         keep.clear();
-        for &e in &self.active {
+        // The limits' repair's scan of the region found what it keeps, if nothing has moved, been
+        // cut or torn since (which would change what moves, or add to the region).
+        let scanned =
+            self.drift_scan.is_some_and(|(key, _)| key == (self.body.motion(), self.body.revision()));
+        if scanned {
+            std::mem::swap(&mut keep, &mut self.scan_keep);
+        }
+        let kept = |e: &&crate::chainmail::ElementId| {
             let i = e.index();
             let moving = |j: usize| self.last_move.get(j).is_some_and(|&m| m > SETTLED);
             let lat = self.body.lattice();
             let (s0, s1) = (lat.adj_start[i] as usize, lat.adj_start[i + 1] as usize);
-            if moving(i) || lat.adj_nbr[s0..s1].iter().any(|&n| moving(n as usize)) {
-                keep.push(e);
-            }
+            moving(i) || lat.adj_nbr[s0..s1].iter().any(|&n| moving(n as usize))
+        };
+        if !scanned {
+            keep.extend(self.active.iter().filter(kept));
         }
+        // The plain path beside the scan's (in debug builds, so that every test's steps compare them).
+        debug_assert!(
+            !scanned || keep.iter().eq(self.active.iter().filter(kept)),
+            "the scan's region differs from the plain prune's"
+        );
         for &e in &self.active {
             self.in_active[e.index()] = false;
         }
