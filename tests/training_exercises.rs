@@ -196,3 +196,31 @@ fn the_report_is_small_summary_first_and_its_plot_peaks_where_the_panel_does() {
     dissect::training::write_plot(&dir.join("report.png"), &report).expect("plot");
     dissect::training::write_report(&dir.join("report.json"), &report).expect("json");
 }
+
+/// The default exercise's checklist ticks "Lift the flap's free edge" only once the U is cut: the dura
+/// grasped and lifted before the incision leaves that step unticked (and the score at 0), the careful
+/// script, which lifts after the U, ticks every step.
+#[test]
+fn the_lift_step_ticks_only_once_the_incision_has_freed_the_flap() {
+    let (_, scene) = exercises().into_iter().find(|(s, _)| s == "durotomy").expect("the default exercise");
+    let goals = scene.goals.as_ref().expect("goals");
+    let lift_step = goals
+        .steps
+        .iter()
+        .position(|s| s.done == dissect::training::StepCheck::Grasp)
+        .expect("a Grasp step in the checklist");
+    let early = Script(vec![
+        Action::Select(InstrumentKind::Forceps),
+        Action::Grasp(Point::Surface(0.5, 0.68, 0.003)),
+        Action::MoveTo { to: Point::Surface(0.5, 0.68, 0.009), steps: 300 },
+        Action::Wait(200),
+        Action::Release,
+        Action::Wait(100),
+    ]);
+    let a = play(&scene, &early, "durotomy: lift before the U");
+    assert!(!a.steps_done[lift_step], "lifting the uncut dura ticked the lift step: {:?}", a.steps_done);
+    assert!(a.steps_done.iter().all(|d| !d), "{:?}", a.steps_done);
+    let careful = Script::load(scenes_dir().join("scripts/durotomy_careful.ron")).expect("script");
+    let a = play(&scene, &careful, "durotomy: careful");
+    assert!(a.steps_done.iter().all(|&d| d), "the careful opening ticks every step: {:?}", a.steps_done);
+}

@@ -65,7 +65,8 @@ impl Region {
 /// When a step of the checklist counts as done (it stays ticked once it is).
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 pub enum StepCheck {
-    /// The forceps have held the tissue at least once.
+    /// The forceps have held the tissue at least once after the `Incision` steps listed before this
+    /// one were done (so "lift the flap" ticks only once the incision has freed it).
     Grasp,
     /// At least this share (`0` to `1`) of the planned incision is cut.
     Incision(f32),

@@ -178,6 +178,8 @@ pub struct Assessor {
     last_tip: Option<[f32; 3]>,
     grasping: bool,
     grasps: u32,
+    /// The forceps held the tissue at some step since the last sample (for the checklist's `Grasp`).
+    held_since_sample: bool,
     history: Vec<Sample>,
     next_sample: f32,
     force: force::ForceMeter,
@@ -276,6 +278,7 @@ impl Assessor {
             last_tip: None,
             grasping: false,
             grasps: 0,
+            held_since_sample: false,
             history: Vec::new(),
             next_sample: 0.0,
             force,
@@ -326,6 +329,7 @@ impl Assessor {
             self.grasps += 1;
         }
         self.grasping = grasping;
+        self.held_since_sample |= grasping;
         self.force.observe(world);
         let torn = world.tissue().damage().links_torn;
         if torn > self.torn_seen {
@@ -352,13 +356,22 @@ impl Assessor {
                         continue;
                     }
                     self.steps_done[k] = match step.done {
-                        StepCheck::Grasp => self.grasps > 0,
+                        // A lift counts once the incision steps listed above it are done (the flap is
+                        // free): the dura grasped and lifted before the U is cut is not that step.
+                        StepCheck::Grasp => {
+                            self.held_since_sample
+                                && self.goals.steps[..k]
+                                    .iter()
+                                    .zip(&self.steps_done)
+                                    .all(|(s, &done)| done || !matches!(s.done, StepCheck::Incision(_)))
+                        }
                         StepCheck::Incision(x) => self.incision_share(world.tissue()).is_some_and(|s| s >= x),
                         StepCheck::Fibres(x) => self.fibre_share(world.tissue()).0 >= x,
                         StepCheck::Separation(x) => separation >= x,
                     };
                 }
             }
+            self.held_since_sample = false;
         }
     }
 
