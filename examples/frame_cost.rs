@@ -10,6 +10,12 @@
 //! ```
 //! prints `wall ms/frame` and `cpu ms/frame` (user + system of every thread, lavapipe's included; Linux
 //! only, read from /proc/self/stat; 0 elsewhere).
+//!
+//! A scene's own tissue through its own cameras instead of the demo snapshot (the scene at rest, or
+//! after a script), e.g. the default exercise at two resolutions:
+//! ```sh
+//! cargo run --release --example frame_cost -- 60 scene scenes/durotomy.ron [scenes/scripts/durotomy_careful.ron]
+//! ```
 
 use std::time::Instant;
 
@@ -41,12 +47,26 @@ fn main() {
             std::process::exit(1);
         }
     };
-    let mut snapshot = demo::two_layers(64, 48, 2);
+    let mut trainee = CameraSpec { eye: [0.0, 0.078, 0.078], target: [0.0; 3], fov_y_deg: 45.0 };
+    let mut observer = CameraSpec { eye: [0.09, 0.05, 0.06], target: [0.0; 3], fov_y_deg: 40.0 };
+    let demo_sheet = args.get(2).map(String::as_str) != Some("scene");
+    let mut snapshot = if demo_sheet {
+        demo::two_layers(64, 48, 2)
+    } else {
+        match scene_snapshot(args.get(3), args.get(4)) {
+            Ok((snapshot, cameras)) => {
+                trainee = cameras.trainee.unwrap_or(trainee);
+                observer = cameras.observer.unwrap_or(observer);
+                snapshot
+            }
+            Err(e) => {
+                eprintln!("frame_cost: {e}");
+                std::process::exit(1);
+            }
+        }
+    };
     let mut renderer = SceneRenderer::with_samples(&gpu, render::OFFSCREEN_FORMAT, style, 1);
-    let trainee =
-        OrbitCamera::from_spec(&CameraSpec { eye: [0.0, 0.078, 0.078], target: [0.0; 3], fov_y_deg: 45.0 });
-    let observer =
-        OrbitCamera::from_spec(&CameraSpec { eye: [0.09, 0.05, 0.06], target: [0.0; 3], fov_y_deg: 40.0 });
+    let (trainee, observer) = (OrbitCamera::from_spec(&trainee), OrbitCamera::from_spec(&observer));
     let views = match (Offscreen::new(&gpu, &renderer, 1280, 800), Offscreen::new(&gpu, &renderer, 1280, 800))
     {
         (Ok(a), Ok(b)) => [(a, trainee), (b, observer)],
@@ -64,8 +84,10 @@ fn main() {
         }
         phase += 0.1;
         let lift = 0.0005 * phase.sin();
-        for p in &mut snapshot.layers[0].positions {
-            p[1] = demo::sheet_height(p[0], p[2], 1.0) + lift;
+        if demo_sheet {
+            for p in &mut snapshot.layers[0].positions {
+                p[1] = demo::sheet_height(p[0], p[2], 1.0) + lift;
+            }
         }
         if let Err(e) = renderer.update(&gpu, &snapshot) {
             eprintln!("frame_cost: {e}");
@@ -90,4 +112,22 @@ fn main() {
         (cpu_seconds() - cpu) * 1e3 / n,
         gpu.describe()
     );
+}
+
+/// The snapshot of `scene` at rest, or at the end of `script`, and the scene's cameras.
+fn scene_snapshot(
+    scene: Option<&String>,
+    script: Option<&String>,
+) -> Result<(dissect::simulation::Snapshot, dissect::scene::Cameras), String> {
+    let path = scene.ok_or("expected a scene file after `scene`")?;
+    let scene = dissect::scene::Scene::load(path).map_err(|e| e.to_string())?;
+    let script = match script {
+        Some(s) => dissect::scene::Script::load(s).map_err(|e| e.to_string())?,
+        None => dissect::scene::Script(Vec::new()),
+    };
+    let out =
+        dissect::runner::run(&scene, path, &script, "frame_cost", None, None).map_err(|e| e.to_string())?;
+    let mut snapshot = dissect::simulation::Snapshot::default();
+    out.world.snapshot_into(&mut snapshot);
+    Ok((snapshot, scene.cameras))
 }

@@ -25,6 +25,9 @@ pub struct Snapshot {
     pub cut_path: Vec<[f32; 3]>,
     /// Stretch of each intact fibre (world length over rest length), in the order of `fibres`.
     pub fibre_stretch: Vec<f32>,
+    /// Where each intact fibre stands at rest, in the order of `fibres` (see [`BrokenFibre::site`]):
+    /// the renderer draws the fibres at a physical density from these, whatever the resolution.
+    pub fibre_sites: Vec<[f32; 4]>,
     /// Stretch at which the fibres tear (their material's tear ratio); `0` when they never tear.
     pub fibre_tear_stretch: f32,
     /// Connective fibres that were cut or torn, with their two ends where they are now.
@@ -46,6 +49,10 @@ pub struct BrokenFibre {
     pub ends: [[f32; 3]; 2],
     /// Cut by the scalpel (`true`) or torn by over-stretching (`false`).
     pub cut: bool,
+    /// Where it stood at rest: its lower end's element's rest position along the surface's `u` and `v`
+    /// (metres from the surface's first corner), then that element's spacing to its neighbours along
+    /// `u` and `v` (metres): the share of the surface the fibre stands for.
+    pub site: [f32; 4],
 }
 
 /// What a region drawn on the tissue means.
@@ -122,6 +129,10 @@ pub struct LayerMesh {
     pub thickness: f32,
     /// The texture it is drawn with.
     pub pattern: SurfacePattern,
+    /// `Some([nu, nv])` when the first `nu × nv` vertices are a grid in rows along `u` (vertex
+    /// `i + nu · j`) and the triangles are its quads' (two per quad) plus any joining other vertices:
+    /// the renderer may then draw several quads as one cell where nothing is cut.
+    pub grid: Option<[u32; 2]>,
 }
 
 /// Which instrument is drawn.

@@ -80,7 +80,13 @@ fn cut_scene() -> Snapshot {
         p[1] += 0.002 * w;
     }
     demo::connect(&mut snap, N, N, FIBRE_STEP as usize);
-    snap.fibres.retain(|[bottom, _]| !in_band(bottom[0], bottom[2]));
+    let keep: Vec<bool> = snap.fibres.iter().map(|[bottom, _]| !in_band(bottom[0], bottom[2])).collect();
+    let mut k = keep.iter();
+    snap.fibres.retain(|_| k.next().copied().unwrap_or(true));
+    let mut k = keep.iter();
+    snap.fibre_sites.retain(|_| k.next().copied().unwrap_or(true));
+    let mut k = keep.iter();
+    snap.fibre_stretch.retain(|_| k.next().copied().unwrap_or(true));
     snap.cut_path = (0..=8)
         .map(|k| [0.0, demo::sheet_height(0.0, 0.0, 1.0) + 0.0005, -0.02 + 0.005 * k as f32])
         .collect();

@@ -28,6 +28,7 @@ fn sheet(name: &str, color: [f32; 4], nu: u32, nv: u32, sign: f32) -> LayerMesh 
         uv_size: [EXTENT, EXTENT],
         thickness: if sign > 0.0 { 0.0006 } else { 0.0003 },
         pattern: if sign > 0.0 { SurfacePattern::Grain } else { SurfacePattern::Vessels },
+        grid: Some([nu, nv]),
         ..Default::default()
     };
     for j in 0..nv {
@@ -92,10 +93,13 @@ pub fn two_layers(nu: u32, nv: u32, fibre_step: u32) -> Snapshot {
 }
 
 /// Rebuilds `snapshot.fibres`: one fibre from the lower sheet (layer 1) to the upper sheet (layer 0) at
-/// every `step`-th vertex of an `nu` × `nv` grid, border included, using the layers' current positions.
+/// every `step`-th vertex of an `nu` × `nv` grid, border included, using the layers' current positions,
+/// each standing at its vertex's rest site (the renderer draws those on its fibre lattice, as it does a
+/// simulated tissue's).
 pub fn connect(snapshot: &mut Snapshot, nu: u32, nv: u32, step: usize) {
     snapshot.fibres.clear();
     snapshot.fibre_stretch.clear();
+    snapshot.fibre_sites.clear();
     let [upper, lower, ..] = snapshot.layers.as_slice() else { return };
     for j in (0..nv as usize).step_by(step.max(1)) {
         for i in (0..nu as usize).step_by(step.max(1)) {
@@ -105,6 +109,8 @@ pub fn connect(snapshot: &mut Snapshot, nu: u32, nv: u32, step: usize) {
             };
             snapshot.fibres.push([bottom, top]);
             snapshot.fibre_stretch.push(1.0);
+            let (du, dv) = (EXTENT / (nu - 1).max(1) as f32, EXTENT / (nv - 1).max(1) as f32);
+            snapshot.fibre_sites.push([i as f32 * du, j as f32 * dv, du, dv]);
         }
     }
 }

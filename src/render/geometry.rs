@@ -85,26 +85,67 @@ pub fn edge_walls(
     }
 }
 
-/// Refills `out` with the intact fibres and their stretch (1 where `stretch` is short).
-pub fn fibre_instances(fibres: &[[[f32; 3]; 2]], stretch: &[f32], out: &mut Vec<LineInstance>) {
-    out.clear();
-    out.extend(fibres.iter().enumerate().map(|(i, [a, b])| {
-        let s = stretch.get(i).copied().unwrap_or(1.0);
-        [a[0], a[1], a[2], b[0], b[1], b[2], s]
-    }));
+/// Spacing of the fibres drawn, metres along the surface at rest: a fibre is drawn where its element is
+/// the one nearest a point of a square lattice of this pitch (one element per point along each axis),
+/// so the picture shows the same density of fibres at every resolution. Just under the default
+/// exercise's 64 × 48 spacing (1.27 mm along `u`, 1.28 mm along `v`), which draws every fibre there.
+pub const FIBRE_PITCH_M: f32 = 0.00125;
+
+/// How far an element's share is shifted along the axis for [`fibre_drawn`], a fraction of it.
+const SHARE_SHIFT: f32 = 1e-3;
+
+/// Whether the fibre standing at `site` (`[u, v, du, dv]`: rest position and element spacing along the
+/// surface, metres; see [`crate::snapshot::BrokenFibre::site`]) is drawn at `pitch`: along each axis its
+/// element's share `[x − d/2, x + d/2)` holds a point of the lattice `k · pitch`. An element coarser
+/// than the pitch always holds one (every fibre is drawn); a finer one holds at most one, so exactly one
+/// element per lattice point is drawn. A fibre with no site (`None`) is drawn.
+pub fn fibre_drawn(site: Option<&[f32; 4]>, pitch: f32) -> bool {
+    let Some(&[u, v, du, dv]) = site else { return true };
+    let holds = |x: f32, d: f32| {
+        if d.is_nan() || d >= pitch {
+            return true;
+        }
+        // The lattice point at or after the share's start: inside when it is before the share's end.
+        // The share is shifted by a thousandth of itself so that a point halfway between two elements
+        // (their shares' common end, computed from each element's own position) falls in one only.
+        let start = x - (0.5 - SHARE_SHIFT) * d;
+        let point = (start / pitch).ceil() * pitch;
+        point < start + d
+    };
+    holds(u, du) && holds(v, dv)
 }
 
-/// Refills `stubs` with two short recoiled ends per broken fibre (a torn one drawn at `torn_stretch`,
-/// whitened, a cut one relaxed) and `marks` with a dot at the lower stub's tip of every cut fibre.
+/// Refills `out` with the intact fibres drawn at `pitch` (see [`fibre_drawn`]) and their stretch (1
+/// where `stretch` is short). `sites` holds each fibre's site in the order of `fibres`.
+pub fn fibre_instances(
+    fibres: &[[[f32; 3]; 2]],
+    stretch: &[f32],
+    sites: &[[f32; 4]],
+    pitch: f32,
+    out: &mut Vec<LineInstance>,
+) {
+    out.clear();
+    out.extend(fibres.iter().enumerate().filter(|&(i, _)| fibre_drawn(sites.get(i), pitch)).map(
+        |(i, [a, b])| {
+            let s = stretch.get(i).copied().unwrap_or(1.0);
+            [a[0], a[1], a[2], b[0], b[1], b[2], s]
+        },
+    ));
+}
+
+/// Refills `stubs` with two short recoiled ends per broken fibre drawn at `pitch` (see [`fibre_drawn`];
+/// a torn one drawn at `torn_stretch`, whitened, a cut one relaxed) and `marks` with a dot at the lower
+/// stub's tip of every such fibre that was cut.
 pub fn broken_instances(
     broken: &[BrokenFibre],
     torn_stretch: f32,
+    pitch: f32,
     stubs: &mut Vec<LineInstance>,
     marks: &mut Vec<LineInstance>,
 ) {
     stubs.clear();
     marks.clear();
-    for f in broken {
+    for f in broken.iter().filter(|f| fibre_drawn(Some(&f.site), pitch)) {
         let (lo, hi) = (Vec3::from(f.ends[0]), Vec3::from(f.ends[1]));
         let d = hi - lo;
         let len = d.length();
@@ -117,6 +158,126 @@ pub fn broken_instances(
         }
         if f.cut {
             marks.push([lo_tip.x, lo_tip.y, lo_tip.z, lo_tip.x, lo_tip.y, lo_tip.z, 1.0]);
+        }
+    }
+}
+
+/// Spacing of the tissue's drawn mesh, metres along the surface at rest: a layer sampled finer than
+/// this is drawn with cells of several grid quads (see [`drawn_triangles`]), so the triangles a frame
+/// rasterises stay about what an 8 cm sheet of 64 × 48 elements has, whatever the resolution. The
+/// vertices are the simulation's own; only where they are joined changes.
+pub const SURFACE_PITCH_M: f32 = 0.00125;
+
+/// How many grid quads along each axis one drawn cell spans for a layer of `grid` vertices over
+/// `uv_size` metres at `pitch`: the pitch over the element spacing, rounded (at least 1: every quad).
+pub fn cell_quads(grid: [u32; 2], uv_size: [f32; 2], pitch: f32) -> u32 {
+    let steps = |n: u32, size: f32| {
+        let spacing = size / n.saturating_sub(1).max(1) as f32;
+        if spacing > 0.0 && spacing.is_finite() { (pitch / spacing + 0.5).floor().max(1.0) } else { 1.0 }
+    };
+    steps(grid[0], uv_size[0]).min(steps(grid[1], uv_size[1])).min(64.0) as u32
+}
+
+/// Refills `out` with the triangles to draw for `layer`, a grid of `grid` = `[nu, nv]` vertices in
+/// rows along `u` (vertex `i + nu · j`; more vertices after them, such as a sphere's poles, and
+/// triangles across a wrapped seam are drawn as given). Cells of `step` × `step` quads whose triangles
+/// are all there (nothing cut or torn in them) are drawn as two triangles between the cell's corners,
+/// or, where a side borders anything but another such cell (a cut, the sheet's border, a seam), as a
+/// fan from a vertex inside the cell through every vertex of that side, so that the neighbour's
+/// triangles meet it vertex for vertex (no cracks). Every other triangle is drawn as given. `step` 1,
+/// or a layer that is not such a grid, draws the triangles as given. `counts` is scratch.
+pub fn drawn_triangles(
+    layer: &LayerMesh,
+    grid: [u32; 2],
+    step: u32,
+    counts: &mut Vec<u8>,
+    out: &mut Vec<[u32; 3]>,
+) {
+    out.clear();
+    let [nu, nv] = grid;
+    let grid_vertices = u64::from(nu) * u64::from(nv);
+    if step <= 1 || nu < 2 || nv < 2 || grid_vertices > layer.positions.len() as u64 {
+        out.extend_from_slice(&layer.triangles);
+        return;
+    }
+    let (qu, qv) = ((nu - 1) as usize, (nv - 1) as usize);
+    // The quad a triangle lies in, if it is one of the grid's (not across a seam or to a pole).
+    let quad_of = |t: &[u32; 3]| -> Option<usize> {
+        if t.iter().any(|&v| u64::from(v) >= grid_vertices) {
+            return None;
+        }
+        let (i, j) = (t.map(|v| v % nu), t.map(|v| v / nu));
+        let (i0, i1) = (i.iter().min()?, i.iter().max()?);
+        let (j0, j1) = (j.iter().min()?, j.iter().max()?);
+        (i1 - i0 <= 1 && j1 - j0 <= 1 && (*i0 as usize) < qu && (*j0 as usize) < qv)
+            .then(|| *j0 as usize * qu + *i0 as usize)
+    };
+    counts.clear();
+    counts.resize(qu * qv, 0);
+    for t in &layer.triangles {
+        if let Some(q) = quad_of(t) {
+            counts[q] = counts[q].saturating_add(1);
+        }
+    }
+    let s = step as usize;
+    let (cu, cv) = (qu / s, qv / s);
+    // Whether cell (a, b) is drawn coarse: every quad in it has both its triangles.
+    let whole = |a: usize, b: usize| {
+        (b * s..(b + 1) * s).all(|j| (a * s..(a + 1) * s).all(|i| counts[j * qu + i] == 2))
+    };
+    let mut coarse = vec![false; cu * cv];
+    for b in 0..cv {
+        for a in 0..cu {
+            coarse[b * cu + a] = whole(a, b);
+        }
+    }
+    let in_coarse = |q: usize| {
+        let (i, j) = (q % qu / s, q / qu / s);
+        i < cu && j < cv && coarse[j * cu + i]
+    };
+    out.extend(layer.triangles.iter().filter(|t| !quad_of(t).is_some_and(in_coarse)));
+    let at = |i: usize, j: usize| (j * nu as usize + i) as u32;
+    let mut ring: Vec<u32> = Vec::with_capacity(4 * s);
+    for b in 0..cv {
+        for a in 0..cu {
+            if !coarse[b * cu + a] {
+                continue;
+            }
+            let (i0, j0, i1, j1) = (a * s, b * s, (a + 1) * s, (b + 1) * s);
+            let neighbour = |da: isize, db: isize| {
+                let (x, y) = (a as isize + da, b as isize + db);
+                x >= 0
+                    && y >= 0
+                    && (x as usize) < cu
+                    && (y as usize) < cv
+                    && coarse[y as usize * cu + x as usize]
+            };
+            // The sides in order round the cell, each from its first corner to the next one's.
+            let sides = [
+                (neighbour(0, -1), (i0, j0), (1isize, 0isize)),
+                (neighbour(1, 0), (i1, j0), (0, 1)),
+                (neighbour(0, 1), (i1, j1), (-1, 0)),
+                (neighbour(-1, 0), (i0, j1), (0, -1)),
+            ];
+            if sides.iter().all(|side| side.0) {
+                let (p, q, r, t) = (at(i0, j0), at(i1, j0), at(i1, j1), at(i0, j1));
+                out.push([p, q, r]);
+                out.push([p, r, t]);
+                continue;
+            }
+            ring.clear();
+            for &(shared, (i, j), (di, dj)) in &sides {
+                let steps = if shared { 1 } else { s };
+                let stride = if shared { s as isize } else { 1 };
+                for k in 0..steps as isize {
+                    let (x, y) = (i as isize + di * k * stride, j as isize + dj * k * stride);
+                    ring.push(at(x as usize, y as usize));
+                }
+            }
+            let centre = at(i0 + s / 2, j0 + s / 2);
+            for k in 0..ring.len() {
+                out.push([centre, ring[k], ring[(k + 1) % ring.len()]]);
+            }
         }
     }
 }
@@ -315,18 +476,116 @@ mod tests {
 
     #[test]
     fn broken_fibres_leave_short_stubs_and_cut_ones_a_mark() {
+        let site = [0.0, 0.0, 0.002, 0.002];
         let broken = [
-            BrokenFibre { ends: [[0.0, 0.0, 0.0], [0.0, 0.004, 0.0]], cut: true },
-            BrokenFibre { ends: [[1.0, 0.0, 0.0], [1.0, 0.001, 0.0]], cut: false },
+            BrokenFibre { ends: [[0.0, 0.0, 0.0], [0.0, 0.004, 0.0]], cut: true, site },
+            BrokenFibre { ends: [[1.0, 0.0, 0.0], [1.0, 0.001, 0.0]], cut: false, site },
         ];
         let (mut stubs, mut marks) = (Vec::new(), Vec::new());
-        broken_instances(&broken, 4.0, &mut stubs, &mut marks);
+        broken_instances(&broken, 4.0, FIBRE_PITCH_M, &mut stubs, &mut marks);
         assert_eq!((stubs.len(), marks.len()), (4, 1));
         let len = |s: &LineInstance| Vec3::new(s[3] - s[0], s[4] - s[1], s[5] - s[2]).length();
         assert!((len(&stubs[0]) - STUB_MAX_M).abs() < 1e-6);
         assert!((len(&stubs[2]) - 0.0003).abs() < 1e-6);
         assert_eq!((stubs[0][6], stubs[2][6]), (1.0, 4.0));
         assert!((marks[0][1] - STUB_MAX_M).abs() < 1e-6);
+    }
+
+    /// The fibres of an `n` × `m` sheet of `w` × `d` metres, every element with one: their sites.
+    fn sites(n: u32, m: u32, w: f32, d: f32) -> Vec<[f32; 4]> {
+        let (du, dv) = (w / (n - 1) as f32, d / (m - 1) as f32);
+        (0..m).flat_map(|j| (0..n).map(move |i| [i as f32 * du, j as f32 * dv, du, dv])).collect()
+    }
+
+    #[test]
+    fn fibres_are_drawn_at_a_physical_density_whatever_the_resolution() {
+        let drawn = |sites: &[[f32; 4]]| sites.iter().filter(|s| fibre_drawn(Some(s), FIBRE_PITCH_M)).count();
+        // The default exercise's sheet, 8 cm by 6 cm: at 64 × 48 every element is coarser than the
+        // pitch, so every fibre is drawn, as before.
+        let coarse = sites(64, 48, 0.08, 0.06);
+        assert_eq!(drawn(&coarse), coarse.len());
+        // Finer: one element per lattice point along each axis, 65 × 49 of them (points from 0 to
+        // 80 mm and 60 mm every 1.25 mm), whether the sheet has 128 × 96, 256 × 192 or 200 × 150.
+        for (n, m) in [(128, 96), (256, 192), (200, 150), (129, 97)] {
+            assert_eq!(drawn(&sites(n, m, 0.08, 0.06)), 65 * 49, "{n} x {m}");
+        }
+        // Drawn fibres are spread evenly: every 1.25 mm square of the sheet holds one at 256 x 192.
+        let fine = sites(256, 192, 0.08, 0.06);
+        let mut cells = vec![0u32; 65 * 49];
+        for s in fine.iter().filter(|s| fibre_drawn(Some(s), FIBRE_PITCH_M)) {
+            let (i, j) = ((s[0] / FIBRE_PITCH_M).round() as usize, (s[1] / FIBRE_PITCH_M).round() as usize);
+            cells[j * 65 + i] += 1;
+        }
+        assert!(cells.iter().all(|&c| c == 1), "{:?}", cells.iter().filter(|&&c| c != 1).count());
+        // A fibre without a site (a snapshot that gives none) is drawn; the same rule for broken ones.
+        assert!(fibre_drawn(None, FIBRE_PITCH_M));
+        let broken: Vec<BrokenFibre> = sites(128, 96, 0.08, 0.06)
+            .into_iter()
+            .map(|site| BrokenFibre { ends: [[0.0; 3], [0.0, 0.002, 0.0]], cut: true, site })
+            .collect();
+        let (mut stubs, mut marks) = (Vec::new(), Vec::new());
+        broken_instances(&broken, 4.0, FIBRE_PITCH_M, &mut stubs, &mut marks);
+        assert_eq!((stubs.len(), marks.len()), (2 * 65 * 49, 65 * 49));
+        let (fibres, stretch) = (vec![[[0.0; 3], [0.0, 0.002, 0.0]]; 128 * 96], vec![1.0; 128 * 96]);
+        let mut out = Vec::new();
+        fibre_instances(&fibres, &stretch, &sites(128, 96, 0.08, 0.06), FIBRE_PITCH_M, &mut out);
+        assert_eq!(out.len(), 65 * 49);
+    }
+
+    /// Edges used by one triangle only (sorted vertex pairs), and the triangles' total area in uv.
+    fn outline(m: &LayerMesh, triangles: &[[u32; 3]]) -> (Vec<(u32, u32)>, f32) {
+        let mut edges = std::collections::BTreeMap::new();
+        let mut area = 0.0;
+        for t in triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+            let [p, q, r] = t.map(|v| Vec2::from(m.uv[v as usize]));
+            area += 0.5 * (q - p).perp_dot(r - p).abs();
+        }
+        (edges.into_iter().filter(|&(_, n)| n == 1).map(|(e, _)| e).collect(), area)
+    }
+
+    #[test]
+    fn a_fine_grid_is_drawn_in_cells_without_cracks() {
+        let n = 13;
+        let mut m = fine_grid(n);
+        m.uv_size = [0.0075, 0.0075];
+        // 0.625 mm between vertices: cells of two quads at the 1.25 mm pitch; four at 2.5 mm.
+        assert_eq!(cell_quads([n, n], m.uv_size, SURFACE_PITCH_M), 2);
+        assert_eq!(cell_quads([n, n], m.uv_size, 2.0 * SURFACE_PITCH_M), 4);
+        assert_eq!(cell_quads([64, 48], [0.08, 0.06], SURFACE_PITCH_M), 1);
+        assert_eq!(cell_quads([128, 96], [0.08, 0.06], SURFACE_PITCH_M), 2);
+        let (mut counts, mut drawn) = (Vec::new(), Vec::new());
+        // Whole: the same outline and area as every quad drawn, in far fewer triangles (the cells at the
+        // border are fans through every border vertex, so the outline is the grid's own).
+        for step in [2, 3, 4] {
+            drawn_triangles(&m, [n, n], step, &mut counts, &mut drawn);
+            let ((edges, area), (want_edges, want_area)) = (outline(&m, &drawn), outline(&m, &m.triangles));
+            assert_eq!(edges, want_edges, "step {step}");
+            assert!((area - want_area).abs() < 1e-5, "step {step}: {area} against {want_area}");
+            assert!(drawn.len() < m.triangles.len() / 2, "step {step}: {} triangles", drawn.len());
+        }
+        // Cut: quads' triangles removed here and there (one of a quad's two, a whole row of quads); the
+        // cells holding them are drawn quad by quad and the cells beside them stitched to them: the
+        // drawn outline is exactly the cut mesh's (each cut edge drawn once, no T-junction), the area
+        // the same, for any step.
+        let mut cut = m.clone();
+        let row = 5 * (n - 1) as usize * 2;
+        cut.triangles.drain(row + 6..row + 14);
+        cut.triangles.remove(40);
+        cut.triangles.remove(3);
+        for step in [1, 2, 3, 4] {
+            drawn_triangles(&cut, [n, n], step, &mut counts, &mut drawn);
+            let (edges, area) = outline(&cut, &drawn);
+            let (want_edges, want_area) = outline(&cut, &cut.triangles);
+            assert_eq!(edges, want_edges, "step {step}");
+            assert!((area - want_area).abs() < 1e-5, "step {step}: {area} against {want_area}");
+        }
+        // Not a grid of that size (or step 1): the triangles as given.
+        drawn_triangles(&m, [n + 1, n], 2, &mut counts, &mut drawn);
+        assert_eq!(drawn, m.triangles);
     }
 
     /// A finer grid for lines: `n` × `n` vertices over uv 0..1, positions (u, 0, v) metres.

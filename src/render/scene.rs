@@ -280,6 +280,9 @@ pub struct SceneRenderer {
     incision_key: Option<(u64, usize, usize)>,
     incision_line: Vec<[f32; 2]>,
     edge_scratch: Vec<(u64, u32)>,
+    /// The triangles a layer is drawn with (see `geometry::drawn_triangles`), and that function's scratch.
+    drawn_scratch: Vec<[u32; 3]>,
+    quad_scratch: Vec<u8>,
     wall_scratch: (Vec<[f32; 3]>, Vec<[f32; 3]>),
     scene: SceneUniform,
     stats: UploadStats,
@@ -649,6 +652,8 @@ impl SceneRenderer {
             incision_key: None,
             incision_line: Vec::new(),
             edge_scratch: Vec::new(),
+            drawn_scratch: Vec::new(),
+            quad_scratch: Vec::new(),
             wall_scratch: (Vec::new(), Vec::new()),
             scene: SceneUniform::default(),
             stats: UploadStats::default(),
@@ -835,9 +840,19 @@ impl SceneRenderer {
                     });
                 }
                 if gpu_layer.topology_version != Some(layer.topology_version) {
-                    grown += u64::from(gpu_layer.indices.write(gpu, bytemuck::cast_slice(&layer.triangles)));
+                    // A grid finer than the drawn mesh's pitch is drawn in cells of several quads where
+                    // nothing is cut (the frame's triangles stay about those of a 64 × 48 sheet).
+                    let drawn = &mut self.drawn_scratch;
+                    match layer.grid {
+                        Some(grid) => {
+                            let step = geometry::cell_quads(grid, layer.uv_size, geometry::SURFACE_PITCH_M);
+                            geometry::drawn_triangles(layer, grid, step, &mut self.quad_scratch, drawn);
+                        }
+                        None => drawn.clone_from(&layer.triangles),
+                    }
+                    grown += u64::from(gpu_layer.indices.write(gpu, bytemuck::cast_slice(drawn)));
                     self.stats.index_rebuilds += 1;
-                    gpu_layer.index_count = layer.triangles.len() as u32 * 3;
+                    gpu_layer.index_count = drawn.len() as u32 * 3;
                     gpu_layer.max_index = max_index;
                     gpu_layer.topology_version = Some(layer.topology_version);
                     geometry::open_edges(layer, &mut self.edge_scratch, &mut gpu_layer.edges);
@@ -866,14 +881,18 @@ impl SceneRenderer {
 
         let show_fibres = self.style.show_fibres;
         let tear = snapshot.fibre_tear_stretch;
+        // Fibres at a physical density (one per FIBRE_PITCH_M square at rest), not one per element.
         geometry::fibre_instances(
             if show_fibres { &snapshot.fibres } else { &[] },
             &snapshot.fibre_stretch,
+            &snapshot.fibre_sites,
+            geometry::FIBRE_PITCH_M,
             &mut self.fibres.scratch,
         );
         geometry::broken_instances(
             if show_fibres { &snapshot.broken_fibres } else { &[] },
             tear,
+            geometry::FIBRE_PITCH_M,
             &mut self.stubs.scratch,
             &mut self.marks.scratch,
         );

@@ -446,7 +446,12 @@ impl World {
     pub fn snapshot_into(&self, out: &mut Snapshot) {
         out.step = self.step;
         self.tissue.fill_meshes(&mut out.layers);
-        self.tissue.fill_fibres(&mut out.fibres, &mut out.fibre_stretch, &mut out.broken_fibres);
+        self.tissue.fill_fibres(
+            &mut out.fibres,
+            &mut out.fibre_stretch,
+            &mut out.fibre_sites,
+            &mut out.broken_fibres,
+        );
         out.fibre_tear_stretch = self.tissue.fibre_tear_stretch();
         out.instrument = Some(self.instrument.pose());
         out.clamped = None;

@@ -333,6 +333,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
             count: sheet as u32,
             material: layer_material[k],
             triangles,
+            grid: Some([nu as u32, nv as u32]),
         });
     }
     // The tissue lists its layers upper first, as the scene does.
@@ -446,6 +447,7 @@ fn build_volume(s: &VolumeSpec, step_seconds: f32) -> Result<Tissue, TissueError
         count: n as u32,
         material: crate::chainmail::MaterialId(0),
         triangles,
+        grid: None,
     }];
     let spacing = (0..3).map(|k| s.size[k] / (dims[k] - 1) as f32).fold(f32::MAX, f32::min);
     let model = match &s.fem {
@@ -535,6 +537,7 @@ impl Tissue {
             layers,
             link_kind,
             rest_len,
+            fibre_sites: Vec::new(),
             sheet,
             min_gap,
             active: Vec::with_capacity(n),
@@ -565,6 +568,7 @@ impl Tissue {
             repair: Default::default(),
         };
         tissue.forces = super::force::LinkFactors::of(&tissue);
+        tissue.fibre_sites = tissue.rest_fibre_sites();
         tissue
     }
 }

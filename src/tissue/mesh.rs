@@ -25,6 +25,7 @@ impl Tissue {
                 slot.name.clone_from(&layer.name);
             }
             slot.color = layer.color;
+            slot.grid = layer.grid;
             let outer = k == 0;
             slot.thickness = if outer { OUTER_THICKNESS } else { INNER_THICKNESS };
             slot.pattern = match (volume, outer) {
@@ -117,21 +118,20 @@ impl Tissue {
     }
 
     /// Refills `out` with the intact connective fibres as world-space segments (the lower layer's end
-    /// first), `stretch` with each one's world stretch, and `broken` with the fibres cut or torn.
+    /// first), `stretch` with each one's world stretch, `sites` with where each stands at rest, and
+    /// `broken` with the fibres cut or torn.
     pub fn fill_fibres(
         &self,
         out: &mut Vec<[[f32; 3]; 2]>,
         stretch: &mut Vec<f32>,
+        sites: &mut Vec<[f32; 4]>,
         broken: &mut Vec<BrokenFibre>,
     ) {
         out.clear();
         stretch.clear();
+        sites.clear();
         broken.clear();
-        for (l, kind) in self.link_kind.iter().enumerate() {
-            let id = LinkId(l as u32);
-            if *kind != LinkKind::Connective {
-                continue;
-            }
+        for &(id, site) in &self.fibre_sites {
             let Some([a, b]) = self.body.lattice().link_ends(id) else { continue };
             let (a, b) = if self.layer_of(a) < self.layer_of(b) { (b, a) } else { (a, b) };
             let (Some(pa), Some(pb)) = (self.world_position(a), self.world_position(b)) else { continue };
@@ -140,11 +140,54 @@ impl Tissue {
                     out.push([pa, pb]);
                     let d =
                         ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2) + (pb[2] - pa[2]).powi(2)).sqrt();
-                    stretch.push(d / self.rest_len[l].max(f32::MIN_POSITIVE));
+                    stretch.push(d / self.rest_len[id.index()].max(f32::MIN_POSITIVE));
+                    sites.push(site);
                 }
-                Some(reason) => broken.push(BrokenFibre { ends: [pa, pb], cut: reason == BreakReason::Cut }),
+                Some(reason) => {
+                    broken.push(BrokenFibre { ends: [pa, pb], cut: reason == BreakReason::Cut, site })
+                }
             }
         }
+    }
+
+    /// The connective fibres in link order with where each stands at rest: its lower layer's element's
+    /// rest position along the surface's `u` and `v` (metres from the surface's first corner) and that
+    /// element's spacing to its nearest neighbours of the same layer along each (metres; the surface's
+    /// span where it has none).
+    pub(crate) fn rest_fibre_sites(&self) -> Vec<(LinkId, [f32; 4])> {
+        let lattice = self.body.lattice();
+        let rest = lattice.rest_positions();
+        let k = match self.geometry {
+            Geometry::Surface(_) => 1,
+            Geometry::Volume => 2,
+        };
+        let (lo, span) = (self.extent_lo, self.extent_span);
+        let mut out = Vec::new();
+        for (l, kind) in self.link_kind.iter().enumerate() {
+            let id = LinkId(l as u32);
+            if *kind != LinkKind::Connective {
+                continue;
+            }
+            let Some([a, b]) = lattice.link_ends(id) else { continue };
+            let a = if self.layer_of(a) < self.layer_of(b) { b } else { a };
+            let layer = self.layer_of(a);
+            let Some(r) = rest.get(a.index()) else { continue };
+            let mut gap = [span[0].abs(), span[k].abs()];
+            for (nb, _) in lattice.neighbours(a) {
+                if self.layer_of(nb) != layer {
+                    continue;
+                }
+                let Some(q) = rest.get(nb.index()) else { continue };
+                for (g, axis) in gap.iter_mut().zip([0, k]) {
+                    let d = (q[axis] - r[axis]).abs();
+                    if d > 1e-9 {
+                        *g = g.min(d);
+                    }
+                }
+            }
+            out.push((id, [r[0] - lo[0], r[k] - lo[k], gap[0], gap[1]]));
+        }
+        out
     }
 
     /// The stretch at which connective fibres tear (the largest tear ratio of their materials), `0`

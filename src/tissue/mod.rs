@@ -116,6 +116,9 @@ pub struct Layer {
     /// Candidate triangles (element ids, global) with the two lattice links each spans; a triangle is
     /// drawn while both links are intact.
     pub(crate) triangles: Vec<([u32; 3], [u32; 2])>,
+    /// `[nu, nv]` when the layer's elements are a surface grid in rows along `u` (see
+    /// [`crate::snapshot::LayerMesh::grid`]).
+    pub(crate) grid: Option<[u32; 2]>,
     /// Rings closed by a fan round an extra vertex (a sphere's poles, which are not lattice rows so
     /// that no link is degenerate): each ring's elements in order, the links between neighbours, and
     /// whether the fan's winding must be flipped to face outwards.
@@ -198,6 +201,9 @@ pub struct Tissue {
     pub(crate) wide_scratch: Vec<[[f32; 3]; 2]>,
     /// World rest length of each link, metres (for stretch and tearing).
     pub(crate) rest_len: Vec<f32>,
+    /// The connective fibres in link order, each with where it stands at rest (see
+    /// [`crate::snapshot::Snapshot::fibre_sites`]): filled once, read by every snapshot.
+    pub(crate) fibre_sites: Vec<(LinkId, [f32; 4])>,
     /// Elements per layer sheet (`nu × nv`) for layered tissue; pairs across layers differ by this.
     pub(crate) sheet: u32,
     pub(crate) min_gap: f32,
