@@ -102,11 +102,15 @@ pub struct Sample {
 /// History is sampled every this many seconds.
 const SAMPLE_EVERY_S: f32 = 0.01;
 /// Upper-layer links cut within this many element spacings of the planned incision are the task, not
-/// damage (a hand does not follow a line exactly).
+/// damage (a hand does not follow a line exactly), and at least within this many
+/// [`INCISION_SPACING_M`]: a finer mesh does not ask for a steadier hand.
 const INCISION_ALLOWANCE: f32 = 1.5;
 /// A point of the planned incision counts as cut when an upper-layer link within this many spacings
-/// of it is cut.
+/// of it is cut (at least within this many [`INCISION_SPACING_M`]).
 const INCISION_REACH: f32 = 1.0;
+/// The spacing the incision's allowance and reach are counted in on finer meshes, metres: the
+/// default exercise's at 64 × 48 (1.27 mm), rounded down so that those keep their own.
+const INCISION_SPACING_M: f32 = 0.00125;
 /// The planned incision is checked at points this many spacings apart.
 const INCISION_STEP: f32 = 0.5;
 
@@ -196,6 +200,8 @@ impl Assessor {
         let rest = tissue.body().lattice().rest_positions();
         let frac = Fractions::of(tissue);
         let spacing = tissue.spacing();
+        // Where the incision is judged, spacings in metres no finer than INCISION_SPACING_M.
+        let judged = spacing.max(INCISION_SPACING_M);
         let line: Vec<Vec2> = goals.incision.iter().map(|&p| frac.lattice(p)).collect();
         let mut points = Vec::new();
         for w in line.windows(2) {
@@ -239,13 +245,13 @@ impl Assessor {
                     let near = kind == upper
                         && line
                             .windows(2)
-                            .any(|w| point_segment_dist(m, w[0], w[1]) <= INCISION_ALLOWANCE * spacing);
+                            .any(|w| point_segment_dist(m, w[0], w[1]) <= INCISION_ALLOWANCE * judged);
                     if !near {
                         penalised.push(id);
                     }
                     if kind == upper {
                         for (k, p) in points.iter().enumerate() {
-                            if m.distance_squared(*p) <= (INCISION_REACH * spacing).powi(2) {
+                            if m.distance_squared(*p) <= (INCISION_REACH * judged).powi(2) {
                                 incision[k].push(id);
                             }
                         }
