@@ -314,7 +314,21 @@ def main():
 
         # 3. The careful dissection played from the URL, against the native run.
         cdp.call("Page.navigate", url=url + "?scene=meninges&script=meninges_careful")
+        # Its pace: the script's steps are due at the scene's rate, as a trainee's are, so the page's
+        # steps per second while it plays (its grasps, lifts and strokes) is the browser's real time.
+        cdp.wait_for("document.body && document.body.dataset.firstFrame", 60, "the script's first frame")
+        started, paces = time.time(), []
+        while not cdp.eval("document.body.dataset.done || ''") and time.time() - started < 300:
+            time.sleep(0.5)
+            stats = cdp.eval("document.getElementById('stats').textContent") or ""
+            words = stats.split()
+            if "steps/s" in words and time.time() - started > 1.5:
+                paces.append(float(words[words.index("steps/s") - 1].replace(",", "")))
+        played = time.time() - started
         cdp.wait_for("document.body && document.body.dataset.done", 300, "the script to finish")
+        if paces:
+            print(f"web: meninges_careful played in {played:.1f} s of wall time; the page's steps/s while it "
+                  f"played: {min(paces):.0f} to {max(paces):.0f}")
         result = cdp.eval("document.getElementById('result').textContent")
         cdp.screenshot(os.path.join(outdir, "script.png"))
         if result.startswith("error"):

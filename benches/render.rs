@@ -6,7 +6,10 @@
 //! submission and a blocking `device.poll` until the GPU is done. No readback. Throughput counts the
 //! layer triangles drawn across both views. `render/frame/meninges_1x`: the same, single-sampled.
 //! `render/frame/meninges_1x_bare`: single-sampled without fibres and shadows (the difference is what
-//! they cost). `render/frame/meninges_1x_128x96`: single-sampled, sheets of 128 × 96 vertices.
+//! they cost). `render/frame/meninges_1x_128x96`: single-sampled, sheets of 128 × 96 vertices (over the
+//! demo's 8 cm square: 0.63 mm apart along x, 0.84 mm along z, which the renderer draws quad by quad);
+//! `render/frame/meninges_1x_128x128`: 0.63 mm both ways, which it draws in cells of 2 × 2 quads where
+//! nothing is cut, as it draws the default exercise's 128 × 96 (see `render::geometry::cell_quads`).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use dissect::render::{self, Gpu, Offscreen, OrbitCamera, SceneRenderer, Style, demo};
@@ -27,6 +30,7 @@ fn frame(c: &mut Criterion) {
         ("meninges_1x", 1, Style::default(), (64, 48)),
         ("meninges_1x_bare", 1, bare, (64, 48)),
         ("meninges_1x_128x96", 1, Style::default(), (128, 96)),
+        ("meninges_1x_128x128", 1, Style::default(), (128, 128)),
     ] {
         two_views(&gpu, &mut group, name, samples, style, size);
     }
