@@ -77,6 +77,8 @@ pub(crate) struct Repair {
     /// Contact wrote an element's position directly this step (its neighbours need not be in the
     /// disturbed region).
     pub(crate) direct: bool,
+    /// The last repair had links to mend (see `Tissue::restore_limits`).
+    repaired: bool,
     /// Contact found layers closer than their gap this step (its moves may undo the gaps it checked
     /// earlier, and it leaves pairs with both ends fixed as they are).
     pub(crate) contact: bool,
@@ -166,23 +168,31 @@ impl Tissue {
         // checked on their own; and a step in which contact found a gap short (it may have moved
         // elements, and where it wrote them directly the region may lack their neighbours) takes
         // the full path. The scan's tears stand if the repair moves nothing.
-        let boxes = super::BoxCheck { tol, stamps: &r.stamps, stamp: r.stamp };
-        let (max2, found) = self.scan_tears(Some(boxes));
-        self.tear_scan = Some(((self.body.motion(), self.body.revision()), max2));
-        let any = found
-            || r.direct
-            || (r.contact && pair.is_some())
-            || r.suspects[..r.carried.min(r.suspects.len())]
-                .iter()
-                .any(|&e| self.violates(e as usize, tol, pair));
-        // The plain path beside the scan: every suspect's links, one by one (in debug builds, so
-        // that every test's steps compare the two).
-        #[cfg(debug_assertions)]
-        {
-            let plain = r.suspects.iter().any(|&e| self.violates(e as usize, tol, pair));
-            debug_assert!(!plain || any, "the tear scan missed a link out of its box");
-            debug_assert!(!found || plain, "the tear scan found a link out of its box the suspects lack");
-        }
+        // Repairs come in runs (a lift that keeps pulling against pins): a step after one that
+        // repaired goes straight to the full path, where the scan would only have been done twice
+        // (the repair's moves make the tear check scan again).
+        let any = if r.repaired {
+            true
+        } else {
+            let boxes = super::BoxCheck { tol, stamps: &r.stamps, stamp: r.stamp };
+            let (max2, found) = self.scan_tears(Some(boxes));
+            self.tear_scan = Some(((self.body.motion(), self.body.revision()), max2));
+            let any = found
+                || r.direct
+                || (r.contact && pair.is_some())
+                || r.suspects[..r.carried.min(r.suspects.len())]
+                    .iter()
+                    .any(|&e| self.violates(e as usize, tol, pair));
+            // The plain path beside the scan: every suspect's links, one by one (in debug builds, so
+            // that every test's steps compare the two).
+            #[cfg(debug_assertions)]
+            {
+                let plain = r.suspects.iter().any(|&e| self.violates(e as usize, tol, pair));
+                debug_assert!(!plain || any, "the tear scan missed a link out of its box");
+                debug_assert!(!found || plain, "the tear scan found a link out of its box the suspects lack");
+            }
+            any
+        };
         let seeds = if any { r.suspects.len() } else { 0 };
         for k in 0..seeds {
             let e = r.suspects[k];
@@ -191,6 +201,7 @@ impl Tissue {
                 r.queue.push(e);
             }
         }
+        r.repaired = !r.queue.is_empty();
         let mut moves = 0u32;
         let cap = (MOVES_PER_ELEMENT * r.suspects.len()).max(MIN_MOVES) as u32;
         let mut head = 0;
