@@ -91,30 +91,19 @@ impl Tissue {
         if self.drift_at == Some(motion) {
             return self.drift_max;
         }
-        // The limits' repair's scan of the region measured it, if nothing has moved or been cut
-        // since (tears and cuts add elements to the region).
-        if self.drift_at.is_some()
-            && let Some((key, d)) = self.drift_scan
-            && key == (motion, self.body.revision())
-        {
-            let (pos, rest) = (self.body.positions(), self.body.lattice().rest_positions());
-            let off = |i: usize| (pos[i][0] - rest[i][0]).abs().max((pos[i][1] - rest[i][1]).abs());
-            // The plain path beside the scan's (in debug builds, so that every test's steps compare
-            // them).
-            debug_assert_eq!(
-                self.drift_max.max(d).to_bits(),
-                self.active.iter().fold(self.drift_max, |m, e| m.max(off(e.index()))).to_bits(),
-                "the scan's drift differs from the plain one"
-            );
-            self.drift_max = self.drift_max.max(d);
-            self.drift_at = Some(motion);
-            return self.drift_max;
-        }
         let (pos, rest) = (self.body.positions(), self.body.lattice().rest_positions());
         let off = |i: usize| (pos[i][0] - rest[i][0]).abs().max((pos[i][1] - rest[i][1]).abs());
-        self.drift_max = match self.drift_at {
-            Some(_) => self.active.iter().fold(self.drift_max, |m, e| m.max(off(e.index()))),
-            None => (0..pos.len()).fold(0.0f32, |m, i| m.max(off(i))),
+        let region = |m: f32| self.active.iter().fold(m, |m, e| m.max(off(e.index())));
+        self.drift_max = match (self.drift_at, self.scan()) {
+            // The limits' repair's scan of the region measured it (the plain loop beside it in debug
+            // builds, so that every test's steps compare them).
+            (Some(_), Some(s)) => {
+                let d = self.drift_max.max(s.drift);
+                debug_assert_eq!(d.to_bits(), region(self.drift_max).to_bits(), "the scan's drift differs");
+                d
+            }
+            (Some(_), None) => region(self.drift_max),
+            (None, _) => (0..pos.len()).fold(0.0f32, |m, i| m.max(off(i))),
         };
         self.drift_at = Some(motion);
         self.drift_max

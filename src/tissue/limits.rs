@@ -74,9 +74,6 @@ pub(crate) struct Repair {
     carry: Vec<u32>,
     /// How many of `suspects` were carried over from the last repair (they come first).
     carried: usize,
-    /// Contact wrote an element's position directly this step (its neighbours need not be in the
-    /// disturbed region).
-    pub(crate) direct: bool,
     /// The last repair had links to mend (see `Tissue::restore_limits`).
     repaired: bool,
     /// Contact found layers closer than their gap this step (its moves may undo the gaps it checked
@@ -127,11 +124,10 @@ impl Repair {
         self.suspects.clear();
         self.stamp = self.stamp.wrapping_add(1).max(1);
         if self.stamp == 1 {
-            self.stamps.iter_mut().for_each(|s| *s = 0);
+            self.stamps.fill(0);
         }
         std::mem::swap(&mut self.suspects, &mut self.carry);
         self.carried = self.suspects.len();
-        self.direct = false;
         self.contact = false;
     }
 
@@ -175,10 +171,8 @@ impl Tissue {
             true
         } else {
             let boxes = super::BoxCheck { tol, stamps: &r.stamps, stamp: r.stamp };
-            let (max2, found) = self.scan_tears(Some(boxes));
-            self.tear_scan = Some(((self.body.motion(), self.body.revision()), max2));
+            let found = self.scan_tears(Some(boxes)).1;
             let any = found
-                || r.direct
                 || (r.contact && pair.is_some())
                 || r.suspects[..r.carried.min(r.suspects.len())]
                     .iter()
@@ -375,18 +369,30 @@ impl Tissue {
 /// Whether `p[x] - p[y]` lies more than `tol` outside the slot's bounds `[lo, hi]` in any coordinate
 /// (branch-free: most links hold; infinite bounds never count).
 #[inline(always)]
-pub(crate) fn outside(px: [f32; 3], py: [f32; 3], [lo, hi]: [[f32; 3]; 2], tol: f32) -> bool {
+fn outside(px: [f32; 3], py: [f32; 3], bounds: [[f32; 3]; 2], tol: f32) -> bool {
+    beyond(px, py, widen(bounds, tol))
+}
+
+/// A slot's bounds `[lo, hi]` widened by `tol` on either side.
+#[inline(always)]
+pub(crate) fn widen([lo, hi]: [[f32; 3]; 2], tol: f32) -> [[f32; 3]; 2] {
+    [lo.map(|x| x - tol), hi.map(|x| x + tol)]
+}
+
+/// Whether `p[x] - p[y]` lies outside the (widened) bounds `[lo, hi]` in any coordinate.
+#[inline(always)]
+pub(crate) fn beyond(px: [f32; 3], py: [f32; 3], [lo, hi]: [[f32; 3]; 2]) -> bool {
     let mut out = false;
     for k in 0..3 {
         let d = px[k] - py[k];
-        out |= (d > hi[k] + tol) | (d < lo[k] - tol);
+        out |= (d > hi[k]) | (d < lo[k]);
     }
     out
 }
 
 /// The lower and upper element of the layer pair element `i` belongs to (`sheet` elements apart).
 #[inline(always)]
-pub(crate) fn partners(i: usize, sheet: u32) -> (usize, usize) {
+fn partners(i: usize, sheet: u32) -> (usize, usize) {
     let s = sheet as usize;
     if i >= s { (i - s, i) } else { (i, i + s) }
 }

@@ -79,6 +79,18 @@ pub(crate) struct BoxCheck<'a> {
 
 const NO_BOXES: BoxCheck<'static> = BoxCheck { tol: 0.0, stamps: &[], stamp: 0 };
 
+/// What the limits' repair's scan of the region found (see [`Tissue::scan_tears`]): it stands for the
+/// tear check, the drift and the region's pruning while the body's motion and revision are still
+/// `key` (nothing moved, cut or torn since; tears and cuts add elements to the region).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RegionScan {
+    key: (u64, u64),
+    /// The largest squared stretch of the layers' links (`tear_hits` holds the tears).
+    max_stretch2: f32,
+    /// The region's drift (see `Tissue::drift`).
+    pub(crate) drift: f32,
+}
+
 /// What the limits' repair's scan of the region finds besides tears (see [`Tissue::scan_region`]).
 #[derive(Default)]
 struct ScanFound<'a> {
@@ -188,14 +200,10 @@ pub struct Tissue {
     pub(crate) tear_scratch: Vec<Option<f32>>,
     /// The links a tear check found past their tear ratio, broken after the scan.
     pub(crate) tear_hits: Vec<LinkId>,
-    /// The limits' repair's tear scan: the body's motion and revision then, and the largest squared
-    /// stretch it found (`tear_hits` holds its hits); [`Tissue::apply_tears`] takes it while both
-    /// are unchanged.
-    pub(crate) tear_scan: Option<((u64, u64), f32)>,
-    /// The same scan's key and the region's drift (see `Tissue::drift`); with it `scan_keep` holds
-    /// what the region keeps at the end of the step (see `Tissue::prune_region`), both valid while
-    /// the body's motion and revision are unchanged.
-    pub(crate) drift_scan: Option<((u64, u64), f32)>,
+    /// What the limits' repair's scan of the region found this step (with `tear_hits` and
+    /// `scan_keep`; see [`Tissue::scan`]).
+    pub(crate) region_scan: Option<RegionScan>,
+    /// What the region keeps at the end of the step, as that scan found it (see `prune_region`).
     pub(crate) scan_keep: Vec<ElementId>,
     /// The slot classes' boxes widened by the repair's tolerance, for the tear scan's box test.
     pub(crate) wide_scratch: Vec<[[f32; 3]; 2]>,
@@ -626,7 +634,7 @@ impl Tissue {
             self.prune_region();
         }
         self.settled = false;
-        self.drift_scan = None;
+        self.region_scan = None;
     }
 
     /// Relaxes the whole body within `budget` (for spare time, and for tests).
@@ -697,7 +705,6 @@ impl Tissue {
                 self.repair.fit(self.body.element_count());
                 self.repair.note(lower.0, pl);
                 self.repair.note(upper.0, pu);
-                self.repair.direct = true;
                 let _ = self.body.set_position(lower, [pl[0], pl[1], pl[2] + dl]);
                 let _ = self.body.set_position(upper, [pu[0], pu[1], pu[2] + du]);
             }
@@ -720,10 +727,9 @@ impl Tissue {
         }
         // The limits' repair scans the region for tears as it looks for links out of their boxes
         // (`limits.rs`): its findings stand if nothing has moved or been cut since.
-        let key = (self.body.motion(), self.body.revision());
-        let max_stretch2 = match self.tear_scan.take() {
-            Some((k, m)) if k == key => m,
-            _ => self.scan_tears(None).0,
+        let max_stretch2 = match self.scan() {
+            Some(s) => s.max_stretch2,
+            None => self.scan_tears(None).0,
         };
         let hits = std::mem::take(&mut self.tear_hits);
         let mut torn = 0;
@@ -755,10 +761,7 @@ impl Tissue {
         let mut wide = std::mem::take(&mut self.wide_scratch);
         wide.clear();
         if let Some(b) = boxes {
-            wide.extend(self.body.classes.iter().map(|c| {
-                let [lo, hi] = c.bounds;
-                [lo.map(|x| x - b.tol), hi.map(|x| x + b.tol)]
-            }));
+            wide.extend(self.body.classes.iter().map(|c| limits::widen(c.bounds, b.tol)));
         }
         let geometry = self.geometry;
         // A flat surface's world is its lattice with the axes permuted: the same lengths, without the
@@ -781,9 +784,16 @@ impl Tissue {
         self.tear_hits = hits;
         self.wide_scratch = wide;
         self.scan_keep = keep;
-        let key = (self.body.motion(), self.body.revision());
-        self.drift_scan = boxes.map(|_| (key, drift));
+        if boxes.is_some() {
+            let key = (self.body.motion(), self.body.revision());
+            self.region_scan = Some(RegionScan { key, max_stretch2: max2, drift });
+        }
         (max2, outside)
+    }
+
+    /// The limits' repair's scan of the region this step, if it still stands (see [`RegionScan`]).
+    pub(crate) fn scan(&self) -> Option<RegionScan> {
+        self.region_scan.filter(|s| s.key == (self.body.motion(), self.body.revision()))
     }
 
     /// The tear check's scan of the disturbed region: each intact link with an end there, from its
@@ -844,10 +854,8 @@ impl Tissue {
                 let q = pos[y];
                 if BOXES {
                     // The slot's box widened by the tolerance, per class (`wide`).
-                    let [lo, hi] = wide[slot_class[e * w + s - s0 as usize] as usize];
-                    let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
-                    let outside = (d[0] > hi[0]) | (d[0] < lo[0]) | (d[1] > hi[1]) | (d[1] < lo[1]);
-                    if (outside | (d[2] > hi[2]) | (d[2] < lo[2])) && (moved(e) || moved(y)) {
+                    let wide = wide[slot_class[e * w + s - s0 as usize] as usize];
+                    if limits::beyond(p, q, wide) && (moved(e) || moved(y)) {
                         out.outside = true;
                     }
                 }

@@ -111,8 +111,7 @@ impl Tissue {
         keep.clear();
         // The limits' repair's scan of the region found what it keeps, if nothing has moved, been
         // cut or torn since (which would change what moves, or add to the region).
-        let scanned =
-            self.drift_scan.is_some_and(|(key, _)| key == (self.body.motion(), self.body.revision()));
+        let scanned = self.scan().is_some();
         if scanned {
             std::mem::swap(&mut keep, &mut self.scan_keep);
         }
