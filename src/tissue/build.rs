@@ -519,7 +519,9 @@ impl Tissue {
             .into_iter()
             .map(|(kind, ids)| (kind, super::link_grid::LinkGrid::new(&body, &ids, wrapped)))
             .collect();
+        let scan_table = super::scan::ScanTable::new(&body, &link_kind, &rest_len);
         let mut tissue = Tissue {
+            scan_table,
             kind_links,
             cut_candidates: Vec::new(),
             drift_max: 0.0,

@@ -20,6 +20,7 @@ mod grasp;
 mod limits;
 mod link_grid;
 mod mesh;
+mod scan;
 mod settle;
 mod spec;
 
@@ -67,6 +68,27 @@ impl Geometry {
 /// out and rounded, could lie above the bar (16 units in the last place of margin against the 3 that
 /// rounding can take).
 const NEAR: f32 = 1.0 - 1e-6;
+
+/// The tear scan's test of one link at squared length `d2` (squared rest length `rest2`, squared tear
+/// ratio `ratio2`): a layer's link raises `max_stretch2`, a link past its ratio is `hit`.
+#[inline(always)]
+fn tear_test(d2: f32, rest2: f32, ratio2: f32, layer: bool, max_stretch2: &mut f32, hit: impl FnOnce()) {
+    // Most links are neither the largest stretch so far nor past their tear ratio: a multiplication
+    // tells, a little on the safe side (`NEAR` lets through every link whose quotient below could
+    // round above the bar), so the division runs only near the bar and its results are exactly those
+    // of dividing every link.
+    let bar = if layer { ratio2.min(*max_stretch2) } else { ratio2 };
+    // (A NaN goes on to the division, as it always did.)
+    if matches!(d2.partial_cmp(&(bar * rest2 * NEAR)), Some(std::cmp::Ordering::Greater) | None) {
+        let stretch2 = d2 / rest2;
+        if layer {
+            *max_stretch2 = max_stretch2.max(stretch2);
+        }
+        if stretch2 > ratio2 {
+            hit();
+        }
+    }
+}
 
 /// What the tear scan needs to also test links against their boxes (see `limits.rs`): the tolerance,
 /// and which elements the step moved (those whose stamp is `stamp`).
@@ -207,6 +229,8 @@ pub struct Tissue {
     pub(crate) scan_keep: Vec<ElementId>,
     /// The slot classes' boxes widened by the repair's tolerance, for the tear scan's box test.
     pub(crate) wide_scratch: Vec<[[f32; 3]; 2]>,
+    /// Each element's links from its `a` end, as the tear scan reads them on a flat surface.
+    pub(crate) scan_table: scan::ScanTable,
     /// World rest length of each link, metres (for stretch and tearing).
     pub(crate) rest_len: Vec<f32>,
     /// The connective fibres in link order, each with where it stands at rest (see
@@ -766,15 +790,22 @@ impl Tissue {
         let geometry = self.geometry;
         // A flat surface's world is its lattice with the axes permuted: the same lengths, without the
         // surface's general map per link end.
+        #[cfg(debug_assertions)]
         let flat = |p| Vec3::from(Surface::flat_to_world(p));
         let general = |p| Vec3::from(geometry.to_world(p));
         let mut out = ScanFound { keep: boxes.is_some().then_some(&mut keep), ..Default::default() };
         let max2 = match (geometry, boxes) {
             (Geometry::Surface(s), None) if s.is_flat() => {
-                self.scan_region::<false>(&tear2, &mut hits, flat, &NO_BOXES, &wide, &mut out)
+                let m = self.scan_flat::<false>(&tear2, &mut hits, &NO_BOXES, &wide, &mut out);
+                #[cfg(debug_assertions)]
+                self.check_scan::<false>(&tear2, &hits, flat, &NO_BOXES, &wide, &out, m);
+                m
             }
             (Geometry::Surface(s), Some(b)) if s.is_flat() => {
-                self.scan_region::<true>(&tear2, &mut hits, flat, &b, &wide, &mut out)
+                let m = self.scan_flat::<true>(&tear2, &mut hits, &b, &wide, &mut out);
+                #[cfg(debug_assertions)]
+                self.check_scan::<true>(&tear2, &hits, flat, &b, &wide, &out, m);
+                m
             }
             (_, None) => self.scan_region::<false>(&tear2, &mut hits, general, &NO_BOXES, &wide, &mut out),
             (_, Some(b)) => self.scan_region::<true>(&tear2, &mut hits, general, &b, &wide, &mut out),
@@ -865,27 +896,41 @@ impl Tissue {
                 // The force proxy is the layers' stretch: fibres are meant to stretch before they are cut.
                 let layer = matches!(kind[l], LinkKind::Layer(_));
                 let ratio2 = tear2.get(material[l].index()).copied().flatten().unwrap_or(f32::INFINITY);
-                // Most links are neither the largest stretch so far nor past their tear ratio: a
-                // multiplication tells, a little on the safe side (`NEAR` lets through every link whose
-                // quotient below could round above the bar), so the division runs only near the bar
-                // and its results are exactly those of dividing every link.
-                let bar = if layer { ratio2.min(max_stretch2) } else { ratio2 };
-                // (A NaN goes on to the division, as it always did.)
-                if matches!(d2.partial_cmp(&(bar * rest2 * NEAR)), Some(std::cmp::Ordering::Greater) | None) {
-                    let stretch2 = d2 / rest2;
-                    if layer {
-                        max_stretch2 = max_stretch2.max(stretch2);
-                    }
-                    if stretch2 > ratio2 {
-                        hits.push(LinkId(raw));
-                    }
-                }
+                tear_test(d2, rest2, ratio2, layer, &mut max_stretch2, || hits.push(LinkId(raw)));
             }
             if keep && let Some(k) = out.keep.as_deref_mut() {
                 k.push(id);
             }
         }
         max_stretch2
+    }
+
+    /// The plain scan beside the table's (debug builds): the same largest stretch, tears, box
+    /// finding, drift and kept elements, to the bit.
+    #[cfg(debug_assertions)]
+    #[allow(clippy::too_many_arguments)]
+    fn check_scan<const BOXES: bool>(
+        &self,
+        tear2: &[Option<f32>],
+        hits: &[LinkId],
+        world: impl Fn([f32; 3]) -> Vec3,
+        boxes: &BoxCheck<'_>,
+        wide: &[[[f32; 3]; 2]],
+        out: &ScanFound<'_>,
+        max2: f32,
+    ) {
+        let (mut plain_hits, mut plain_keep) = (Vec::new(), Vec::new());
+        let mut plain =
+            ScanFound { keep: out.keep.is_some().then_some(&mut plain_keep), ..Default::default() };
+        let m = self.scan_region::<BOXES>(tear2, &mut plain_hits, world, boxes, wide, &mut plain);
+        let (outside, drift) = (plain.outside, plain.drift);
+        debug_assert_eq!(m.to_bits(), max2.to_bits(), "the tear scans' largest stretch differs");
+        debug_assert_eq!(plain_hits, hits, "the tear scans' tears differ");
+        debug_assert_eq!(outside, out.outside, "the tear scans' box findings differ");
+        debug_assert_eq!(drift.to_bits(), out.drift.to_bits(), "the tear scans' drift differs");
+        if let Some(keep) = out.keep.as_deref() {
+            debug_assert_eq!(&plain_keep, keep, "the tear scans' kept elements differ");
+        }
     }
 
     /// World length of a link over its world rest length.
