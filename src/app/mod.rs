@@ -384,8 +384,13 @@ fn split(area: egui::Rect, single: bool) -> (egui::Rect, Option<egui::Rect>) {
 fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let camera = state.trainee.camera.camera;
     let pointer = state.trainee.pointer;
-    session.refresh_picker();
-    let (ray, hit) = input::pick(&session.picker, session.snapshot(), &camera, &pointer);
+    // The tissue under the cursor, where the hand reads it (rebuilding the picker costs a frame).
+    let (ray, hit) = if press || state.hand.reads_tissue(session.world()) {
+        session.refresh_picker();
+        input::pick(&session.picker, session.snapshot(), &camera, &pointer)
+    } else {
+        (camera.ray(pointer.pos, pointer.size), None)
+    };
     let mut out = Vec::new();
     if press {
         if let Some(hit) = state.hand.press(session.world(), &camera, ray, hit, &mut out) {

@@ -380,8 +380,13 @@ impl WebApp {
 fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let camera = state.win.camera.camera;
     let pointer = state.win.pointer;
-    session.refresh_picker();
-    let (ray, hit) = input::pick(&session.picker, &session.snapshot, &camera, &pointer);
+    // The tissue under the cursor, where the hand reads it (rebuilding the picker costs a frame).
+    let (ray, hit) = if press || state.hand.reads_tissue(&session.view) {
+        session.refresh_picker();
+        input::pick(&session.picker, &session.snapshot, &camera, &pointer)
+    } else {
+        (camera.ray(pointer.pos, pointer.size), None)
+    };
     let mut out = Vec::new();
     if press {
         // The browser steps its world in the frame loop: the grasp is resolved here at once.
