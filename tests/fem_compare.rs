@@ -52,6 +52,13 @@ fn forces_match_the_fem_at_two_resolutions() {
         let large = &report.rows[1];
         let (cm, fem, base) = (n(large.chainmail_force), n(large.fem_force), n(large.chainmail_base_force));
         assert!(cm < fem && fem < base, "{nodes} nodes, 20 %: {cm} < {fem} < {base}");
+        // Why: at 2 % the FEM's own field keeps every link within ChainMail's limits, at 20 % it
+        // takes links round the patch past them (the limits, not the springs, part the two).
+        assert_eq!(small.fem_links_outside, 0, "{nodes} nodes, 2 %: {small:?}");
+        assert!(
+            large.fem_links_outside > 0 && large.fem_worst_outside > 0.1,
+            "{nodes} nodes, 20 %: {large:?}"
+        );
     }
 }
 

@@ -135,6 +135,12 @@ pub struct CompareRow {
     pub chainmail_base_force: [f64; 3],
     /// `|chainmail_force − fem_force| / |fem_force|`.
     pub force_error: f64,
+    /// Links of the ChainMail lattice that the FEM's own displacement field (every node's, the
+    /// interior recovered from the surface) puts outside their constraint boxes by more than a
+    /// thousandth of a spacing: no ChainMail state that keeps its limits can match the FEM there.
+    pub fem_links_outside: usize,
+    /// The most any link lies outside its box in the FEM's field, in spacings.
+    pub fem_worst_outside: f64,
     /// Mean time of one ChainMail step (deformation + `step_sweeps` sweeps), microseconds.
     pub chainmail_step_us: f64,
     /// Time of the ChainMail deformation plus relaxation to convergence, milliseconds.
@@ -220,8 +226,50 @@ impl fmt::Display for CompareReport {
                 norm(r.chainmail_base_force)
             )?;
         }
+        for r in &self.rows {
+            let at = 100.0 * r.fraction_of_height;
+            match r.fem_links_outside {
+                0 => writeln!(
+                    f,
+                    "at {at:.0} %, the FEM's own field keeps every link within ChainMail's limits"
+                )?,
+                n => writeln!(
+                    f,
+                    "at {at:.0} %, the FEM's own field puts {n} links outside ChainMail's limits (by up to {:.2} spacings): no state within the limits can follow it there",
+                    r.fem_worst_outside
+                )?,
+            }
+        }
         Ok(())
     }
+}
+
+/// How many links the FEM's whole displacement field `u` (surface dofs; the interior recovered) puts
+/// outside their ChainMail boxes by more than a thousandth of a spacing, and the most any lies out, in
+/// spacings. Leaves `body` at rest.
+fn fem_outside_limits(
+    model: &FemModel,
+    body: &mut Body,
+    u: &[f64],
+    spacing: f64,
+) -> Result<(usize, f64), FemError> {
+    let field = model.full_field(u)?;
+    body.reset_to_rest();
+    let rest = body.lattice().rest_positions().to_vec();
+    for (n, (d, r)) in field.iter().zip(&rest).enumerate() {
+        let p = [0, 1, 2].map(|k| r[k] + d[k] as f32);
+        body.set_position(ElementId(n as u32), p).map_err(chainmail)?;
+    }
+    let (mut outside, mut worst) = (0, 0.0f64);
+    for l in 0..body.link_count() {
+        let v = body.link_violation(crate::chainmail::LinkId(l as u32)).unwrap_or(0.0) as f64 / spacing;
+        if v > 1e-3 {
+            outside += 1;
+        }
+        worst = worst.max(v);
+    }
+    body.reset_to_rest();
+    Ok((outside, worst))
 }
 
 fn norm(v: [f64; 3]) -> f64 {
@@ -431,6 +479,7 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
         let base = spring_force(&body, &pinned, modulus);
         let chainmail_base_force = base.map(|x| -x);
         let fem_force = forces.iter().fold([0.0; 3], |s, f| [0, 1, 2].map(|k| s[k] + f[k]));
+        let (fem_links_outside, fem_worst_outside) = fem_outside_limits(&model, &mut body, &u, cfg.spacing)?;
         let diff = (0..3).map(|k| (chainmail_force[k] - fem_force[k]).powi(2)).sum::<f64>().sqrt();
         let scale = fem_force.iter().map(|x| x * x).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
         rows.push(CompareRow {
@@ -448,6 +497,8 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
             chainmail_force_step,
             chainmail_base_force,
             force_error: diff / scale,
+            fem_links_outside,
+            fem_worst_outside,
             chainmail_step_us: step_time * 1e6 / cfg.timing_repeats as f64,
             chainmail_converge_ms: converge.as_secs_f64() * 1e3,
             fem_step_us,
