@@ -91,9 +91,11 @@ fn cut_fibres_let_the_layers_part_there_and_not_elsewhere() {
     assert!(height(t, upper) >= TENT_TOP, "upper lifted to {}", height(t, upper));
     // The forceps' 2 mm jaws hold a patch, not one element, so the tent is wider and the fibres just
     // outside the cut patch lift its edge a little more: the centre of the lower layer rises about
-    // 2.1 mm while the upper layer goes past 12 mm (it was under 2 mm with one-element jaws).
+    // 3.1 mm while the upper layer goes past 12 mm (it was under 2 mm with one-element jaws, 2.1 mm
+    // while the tent was a pyramid: a round tent stands higher over the patch's corners, whose fibres
+    // lift the lower layer's edge there).
     assert!(
-        height(t, lower) < 0.0025,
+        height(t, lower) < 0.0035,
         "lower layer followed to {} where the fibres were cut",
         height(t, lower)
     );

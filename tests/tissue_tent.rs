@@ -1,10 +1,12 @@
 //! A point lift's tent is rounded (issue 14, point 4): the forceps lift the dura of the meninges
 //! scene at its centre by 5 mm and hold it while the tissue settles; the dura's height at one radius
-//! (8 mm, inside the tent) in 8 directions must vary by less than 10 % of its mean.
+//! (8 mm, inside the tent) in 16 directions must vary by less than 10 % of its mean.
 //!
-//! ChainMail's limits are boxes along the lattice's axes: a lift whose slope reaches the shear limit
-//! spreads as a square pyramid (straight ridges along the axes, lower along the diagonals), and
-//! relaxation, which never moves an element out of its links' boxes, cannot round it.
+//! ChainMail's links bound the normal offset along the lattice's axes only: alone they made a lift
+//! whose slope reaches the shear limit a square pyramid (3.00 mm high 8 mm out along the axes and
+//! 2.17 mm along the diagonals at 64 x 48, 32 % apart), and relaxation, which never moves an element
+//! out of its links' boxes, could not round it. The cells' diagonals bound it too (normal pairs,
+//! `chainmail/pairs.rs`): the least lift is an octagon, under 8.2 % from round.
 
 mod common;
 
@@ -34,8 +36,9 @@ fn height(world: &World, nu: usize, nv: usize, u: f32, v: f32) -> f32 {
         + fv * ((1.0 - fu) * h(i, j + 1) + fu * h(i + 1, j + 1))
 }
 
-/// Lifts the dura's centre by `lift` metres and returns its heights at `radius` in 8 directions.
-fn tent(nu: u32, nv: u32, lift: f32, radius: f32) -> [f32; 8] {
+/// Lifts the dura's centre by `lift` metres and returns its heights at `radius` in `D` directions
+/// (evenly spaced, the first along `u`).
+fn tent<const D: usize>(nu: u32, nv: u32, lift: f32, radius: f32) -> [f32; D] {
     let mut world = world(nu, nv);
     let t = world.tissue();
     let dura =
@@ -60,37 +63,50 @@ fn tent(nu: u32, nv: u32, lift: f32, radius: f32) -> [f32; 8] {
     }
     let (nu, nv) = (nu as usize, nv as usize);
     std::array::from_fn(|k| {
-        let a = k as f32 * std::f32::consts::FRAC_PI_4;
+        let a = k as f32 * std::f32::consts::TAU / D as f32;
         height(&world, nu, nv, centre[0] + radius * a.cos(), centre[1] + radius * a.sin())
     })
 }
 
-fn spread(h: &[f32; 8]) -> f32 {
-    let mean = h.iter().sum::<f32>() / 8.0;
+fn spread(h: &[f32]) -> f32 {
+    let mean = h.iter().sum::<f32>() / h.len() as f32;
     let (lo, hi) = h.iter().fold((f32::MAX, f32::MIN), |(l, u), &x| (l.min(x), u.max(x)));
     (hi - lo) / mean
 }
 
-#[test]
-#[ignore = "fails today: the tent is a square pyramid (the dura lifted 5 mm at 128 x 96 stands 3.16 mm high 8 mm out along the axes and 2.49 mm along the diagonals: 23.8 % apart; 3.00 and 2.17 mm, 32 %, at 64 x 48); relaxation stops at the links' boxes (issue 14, point 4)"]
-fn a_point_lift_is_rounded() {
-    let h = tent(128, 96, 0.005, 0.008);
+/// The heights at 8 mm in 16 directions (every 22.5 degrees: a pyramid is lowest at the diagonals,
+/// an octagon at the 8 directions between its corners and the middles of its sides) vary by less than
+/// 10 % of their mean.
+fn assert_rounded(nu: u32, nv: u32) {
+    let h = tent::<16>(nu, nv, 0.005, 0.008);
     let s = spread(&h);
-    eprintln!("128 x 96: heights at 8 mm {h:?}, spread {:.1} %", 100.0 * s);
-    assert!(s < 0.10, "heights at 8 mm in 8 directions {h:?} vary by {:.1} % of their mean", 100.0 * s);
+    eprintln!("{nu} x {nv}: heights at 8 mm (mm) {:.3?}, spread {:.1} %", h.map(|x| 1e3 * x), 100.0 * s);
+    assert!(s < 0.10, "heights at 8 mm in 16 directions {h:?} vary by {:.1} % of their mean", 100.0 * s);
 }
 
-/// What the tent is today, so that a change in its shape is seen: higher along the axes than along
-/// the diagonals, and inside the lift.
+#[test]
+fn a_point_lift_is_rounded() {
+    assert_rounded(128, 96);
+}
+
+#[test]
+fn a_point_lift_is_rounded_at_64_x_48() {
+    assert_rounded(64, 48);
+}
+
+/// The tent rises around the forceps, inside the lift, and along the lattice's axes it stands where
+/// the dura's slope limit puts it (`max_shear` 0.25: 5 mm less a quarter of 8 mm, 3 mm; the pyramid
+/// of the links alone stood 3.00 mm at 64 x 48 and 3.16 mm at 128 x 96): rounding the tent raises
+/// the diagonals, it does not lower the axes.
 #[test]
 fn a_point_lift_rises_around_the_forceps() {
-    let h = tent(64, 48, 0.005, 0.008);
-    for (k, &x) in h.iter().enumerate() {
-        assert!(x > 0.0 && x < 0.005, "direction {k}: {x} m ({h:?})");
+    for (nu, nv) in [(64, 48), (128, 96)] {
+        let h = tent::<8>(nu, nv, 0.005, 0.008);
+        for (k, &x) in h.iter().enumerate() {
+            assert!(x > 0.0 && x < 0.005, "{nu} x {nv}, direction {k}: {x} m ({h:?})");
+        }
+        for k in [0, 2, 4, 6] {
+            assert!((h[k] - 0.003).abs() < 0.0003, "{nu} x {nv}, axis {k}: {} mm ({h:?})", 1e3 * h[k]);
+        }
     }
-    let (axes, diagonals) = ([h[0], h[2], h[4], h[6]], [h[1], h[3], h[5], h[7]]);
-    let min_axis = axes.iter().fold(f32::MAX, |m, &x| m.min(x));
-    let max_diagonal = diagonals.iter().fold(f32::MIN, |m, &x| m.max(x));
-    eprintln!("heights at 8 mm: {h:?}, spread {:.1} %", 100.0 * spread(&h));
-    assert!(min_axis >= max_diagonal, "axes {axes:?} diagonals {diagonals:?}");
 }

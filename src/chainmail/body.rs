@@ -68,10 +68,12 @@ pub struct Body {
     /// reaction that kept moves, a relaxation, a direct write). What a blocked pull measured stays
     /// true while it and the revision stay the same.
     pub(crate) motion: u64,
+    /// Elements whose normal offset is bounded without a link between them (see `pairs.rs`).
+    pub(crate) pairs: super::pairs::Pairs,
 }
 
 /// A number no earlier call returned (for [`Body::shape`] and [`Body::revision`]).
-fn fresh_number() -> u64 {
+pub(super) fn fresh_number() -> u64 {
     use std::sync::atomic::{AtomicU64, Ordering};
     static NEXT: AtomicU64 = AtomicU64::new(1);
     NEXT.fetch_add(1, Ordering::Relaxed)
@@ -139,6 +141,7 @@ impl Body {
             shape: fresh_number(),
             revision: 0,
             motion: 0,
+            pairs: Default::default(),
         };
         for l in 0..m {
             body.update_link_box(l);
@@ -169,6 +172,7 @@ impl Body {
             let cb = self.intern(SlotClass { bounds: [lo, hi], w });
             self.set_slot_class(sb, cb);
         }
+        self.update_pairs_of_link(l);
     }
 
     /// Sets slot `k`'s class and the change bits of its owner and the owner's successor (the class
@@ -440,6 +444,7 @@ impl Body {
         for s in self.slots_of(i) {
             self.set_slot_class(s, 0);
         }
+        self.update_pairs_of_link(i);
         Ok(true)
     }
 

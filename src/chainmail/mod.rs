@@ -39,6 +39,7 @@
 //! | `simd`, `schedule` | the SIMD level and its dispatch; running two halves of a sweep on two threads |
 //! | `lattice` | elements, links, rest shape, adjacency (immutable) |
 //! | `body` | positions, pins, materials, broken links, the slot classes both loops read |
+//! | `pairs` | normal pairs: element pairs without a link whose normal offset is bounded (a grid cell's diagonals), so that the slope limit is round |
 //! | `stencil` | what the fast paths know of a grid body: neighbour offsets, regular elements, row boxes |
 //! | `workspace` | the loops' scratch, the stencil of the body it serves, the SIMD level |
 //! | `reaction/` | the chain reaction: API and one-by-one loop (`mod`), shared arrays and checks (`arrays`), runs across rows (`runs`) in portable (`chunk`) or AVX-512 (`avx512`) chunks |
@@ -50,6 +51,7 @@ mod error;
 mod ids;
 mod lattice;
 mod material;
+mod pairs;
 mod reaction;
 mod relax;
 mod schedule;
@@ -64,6 +66,7 @@ pub use ids::{ElementId, LinkId, MaterialId};
 pub(crate) use lattice::SIDE_B as SIDE_B_BIT;
 pub use lattice::{Axis, BYTES_PER_ELEMENT, GridSpec, Lattice, LinkSpec, MAX_ELEMENTS};
 pub use material::{DEFAULT_THICKNESS, DEFAULT_TOUGHNESS, DEFAULT_YOUNG_MODULUS, Limits, Material};
+pub use pairs::NormalPair;
 pub use reaction::{Deformation, Pass};
 pub(crate) use relax::sweeps_within;
 pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};

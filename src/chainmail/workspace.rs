@@ -30,6 +30,15 @@ pub struct Workspace {
     pub(crate) seed_full: Vec<[f32; 3]>,
     /// The search for the largest move allowed.
     pub(crate) search: SearchScratch,
+    /// The normal pairs' completion of a normal pass (`reaction/complete.rs`): a bit per element
+    /// waiting to be checked, the links' normal bounds widened per slot class and the body's revision
+    /// and class count they were widened for.
+    pub(crate) pair_bits: Vec<u64>,
+    pub(crate) class_z: Vec<[f32; 2]>,
+    pub(crate) class_z_key: (u64, usize),
+    /// The completion takes its plain path whatever the widths (for the tests that compare the two).
+    pub(crate) plain_pairs: bool,
+
     /// Relaxation's second buffer.
     pub(crate) next: Vec<[f32; 3]>,
     /// The grid tables of the body last fitted (`None` for other lattices), and the body's
@@ -77,6 +86,12 @@ impl Workspace {
     /// benches compare the levels with it.
     pub fn set_simd(&mut self, level: SimdLevel) {
         self.simd = level.supported();
+    }
+
+    /// Makes the normal pass's completion over normal pairs take its plain path (`true`) or its fast
+    /// one where the body's widths have it (`false`, the default): tests compare the two bit for bit.
+    pub fn set_plain_pairs(&mut self, plain: bool) {
+        self.plain_pairs = plain;
     }
 
     /// Elements moved by the last deformation, in the order they moved (the source first).

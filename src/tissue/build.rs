@@ -7,7 +7,8 @@ use thiserror::Error;
 use super::spec::{ConnectiveSpec, Edge, LayerSpec, Pinning};
 use super::{Damage, Geometry, Layer, LinkKind, Tissue};
 use crate::chainmail::{
-    Body, ChainMailError, ElementId, GridSpec, Lattice, LinkId, LinkSpec, MAX_ELEMENTS, Material, Workspace,
+    Body, ChainMailError, ElementId, GridSpec, Lattice, LinkId, LinkSpec, MAX_ELEMENTS, Material, NormalPair,
+    Workspace,
 };
 use crate::surface::Surface;
 
@@ -279,6 +280,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
     let link_of = |a: ElementId, b: ElementId, body: &Body| -> u32 {
         body.lattice().neighbours(a).find(|&(n, _)| n == b).map(|(_, l)| l.0).unwrap_or(u32::MAX)
     };
+    let mut pairs = Vec::new();
     for (k, &src) in order.iter().enumerate() {
         let spec = &s.layers[src];
         let mut triangles = Vec::new();
@@ -306,6 +308,13 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
                 };
                 triangles.push((t1, [ab, bc]));
                 triangles.push((t2, [dc, ad]));
+                // The cell's diagonals bound the normal offset as its sides do (see
+                // `chainmail::NormalPair`): the tent of a point lift is then round, not a pyramid.
+                if [ab, bc, dc, ad].iter().all(|&l| l != u32::MAX) {
+                    let [ab, bc, dc, ad] = [ab, bc, dc, ad].map(LinkId);
+                    pairs.push(NormalPair { a, b: c, paths: [[ab, bc], [ad, dc]] });
+                    pairs.push(NormalPair { a: b, b: d, paths: [[ab, ad], [bc, dc]] });
+                }
             }
         }
         // A sphere's pole rings are closed by fans round their poles, for drawing only.
@@ -336,6 +345,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
             grid: Some([nu as u32, nv as u32]),
         });
     }
+    body.set_normal_pairs(&pairs)?;
     // The tissue lists its layers upper first, as the scene does.
     layers.reverse();
     let spacing = {

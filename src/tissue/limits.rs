@@ -167,7 +167,11 @@ impl Tissue {
         // Repairs come in runs (a lift that keeps pulling against pins): a step after one that
         // repaired goes straight to the full path, where the scan would only have been done twice
         // (the repair's moves make the tear check scan again).
-        let any = if r.repaired {
+        // Normal pairs (a layer cell's diagonals) are not in the scan: the normal pass meets every
+        // pair of what it moves (to a far finer tolerance), relaxation never moves an element out of
+        // one, and the pass says when it left one outside (`Body::take_pairs_unmet`).
+        let unmet = self.body.take_pairs_unmet() > tol;
+        let any = if r.repaired || unmet {
             true
         } else {
             let boxes = super::BoxCheck { tol, stamps: &r.stamps, stamp: r.stamp };
@@ -233,6 +237,29 @@ impl Tissue {
                         Some(false) => qy[k] = px[k] - (d - over),
                         None => r.carry.push(x as u32),
                     }
+                }
+                moves += self.repair_move(&mut r, x, qx) + self.repair_move(&mut r, y, qy);
+            }
+            // Normal pairs (a cell's diagonals) bound the normal coordinate as links do. (The chain
+            // reaction's normal pass meets them already: only direct writes leave them out.)
+            let pw = self.body.pairs.width;
+            for t in 0..pw {
+                let y = self.body.pairs.nbr[x * pw + t] as usize;
+                let [lo, hi] = self.body.pairs.bounds[x * pw + t];
+                let (px, py) = (self.body.pos[x], self.body.pos[y]);
+                let d = px[2] - py[2];
+                let over = if d > hi + tol {
+                    d - hi
+                } else if d < lo - tol {
+                    d - lo
+                } else {
+                    continue;
+                };
+                let (mut qx, mut qy) = (px, py);
+                match self.follower(&r, x, y, 2, over) {
+                    Some(true) => qx[2] = py[2] + (d - over),
+                    Some(false) => qy[2] = px[2] - (d - over),
+                    None => r.carry.push(x as u32),
                 }
                 moves += self.repair_move(&mut r, x, qx) + self.repair_move(&mut r, y, qy);
             }
@@ -353,6 +380,13 @@ impl Tissue {
         let pi = body.pos[i];
         for (&y, &c) in nbrs.iter().zip(cls) {
             if outside(pi, body.pos[y as usize], body.classes[c as usize].bounds, tol) {
+                return true;
+            }
+        }
+        let (pairs, bounds) = body.pairs.row(i);
+        for (&y, &[lo, hi]) in pairs.iter().zip(bounds) {
+            let d = pi[2] - body.pos[y as usize][2];
+            if (d > hi + tol) | (d < lo - tol) {
                 return true;
             }
         }

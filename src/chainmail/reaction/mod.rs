@@ -16,6 +16,8 @@ use runs::{Wide, batch};
 
 mod arrays;
 mod chunk;
+mod complete;
+pub(crate) use complete::widen_z;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 mod runs;
@@ -453,6 +455,16 @@ impl Body {
             }
             if !progressed {
                 break;
+            }
+        }
+        // The normal pass of a body with normal pairs: the lists above kept each element within its
+        // sponsor's link; the pairs (and the links the pairs' moves disturb) are met after them.
+        if MASK == 0b100 && self.pairs.any() && (!blocked || r.measure.is_some()) {
+            let done = self.complete_pairs(ws, r.measure, &mut excess);
+            blocked |= done.blocked;
+            // A bound of a moved element left outside: the limits' repair hears of it.
+            if !blocked {
+                self.pairs.unmet = self.pairs.unmet.max(done.unmet);
             }
         }
         if blocked {

@@ -65,15 +65,39 @@ impl Body {
         let p = pos_of(i);
         let (w, rest) = (self.width, &self.lattice.rest);
         let row = i * w..(i + 1) * w;
-        Some(relaxed_bounded(
-            pos_of,
+        if !self.pairs.any() {
+            return Some(relaxed_bounded(
+                &pos_of,
+                p,
+                rest[i],
+                &self.slot_nbr[row.clone()],
+                &self.slot_class[row],
+                &self.classes,
+                |_, j| rest[j],
+            ));
+        }
+        // Normal pairs bound the normal coordinate too: the intersection with theirs, and the step
+        // shortened to it as to the links' (never further out than the element is, never backwards).
+        let (q, mut lo, mut hi) = relaxed_bounded(
+            &pos_of,
             p,
             rest[i],
             &self.slot_nbr[row.clone()],
             &self.slot_class[row],
             &self.classes,
             |_, j| rest[j],
-        ))
+        );
+        let (nbrs, bounds) = self.pairs.row(i);
+        for (&j, &[blo, bhi]) in nbrs.iter().zip(bounds) {
+            let z = pos_of(j as usize)[2];
+            lo[2] = lo[2].max(z + blo);
+            hi[2] = hi[2].min(z + bhi);
+        }
+        let mut q = q;
+        let floor = if lo[2] < p[2] { lo[2] } else { p[2] };
+        let ceil = if hi[2] > p[2] { hi[2] } else { p[2] };
+        q[2] = clamp(q[2], floor, ceil);
+        Some((q, lo, hi))
     }
 }
 

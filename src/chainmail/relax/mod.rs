@@ -89,6 +89,10 @@ impl Body {
     fn sweep_all(&mut self, ws: &mut Workspace) -> f32 {
         // Grids take the stencil path: in place, in vectors, in bands on the pool's threads; the same
         // result up to rounding (regular elements skip the rest positions, whose offsets cancel).
+        // (Normal pairs bound more than the links: the plain element update keeps them.)
+        if self.pairs.any() {
+            return self.sweep_all_elements(ws);
+        }
         if let Some(change) = self.sweep_grid(ws) {
             return change;
         }
@@ -113,6 +117,18 @@ impl Body {
                 if flags & FIXED != 0 { p } else { relaxed_row(pos, rest, p, r, nbrs, classes, slot_class) };
             change = max_change(change, p, q);
             *next = q;
+        }
+        std::mem::swap(&mut self.pos, &mut ws.next);
+        change
+    }
+
+    /// One Jacobi sweep over every element with the plain element update (pairs included).
+    fn sweep_all_elements(&mut self, ws: &mut Workspace) -> f32 {
+        let mut change = 0.0f32;
+        for i in 0..self.pos.len() {
+            let (p, q) = (self.pos[i], self.relaxed_unless_fixed(i));
+            change = max_change(change, p, q);
+            ws.next[i] = q;
         }
         std::mem::swap(&mut self.pos, &mut ws.next);
         change

@@ -1,0 +1,309 @@
+//! Normal pairs: two elements that share no link but whose offset along the third coordinate (the
+//! surface normal `h` of a SurfaceChainMail lattice) is bounded all the same, so that the slope limit
+//! is the same in every direction and not only along the links.
+//!
+//! A grid's links bound the normal offset between neighbours along `u` and `v` separately: the least
+//! lift of one element is then a square pyramid (a diamond in the L1 metric: at the same distance the
+//! surface stands lower along the diagonals than along the axes). A cell's two diagonals, as pairs
+//! bounded by the hypotenuse of the two links' normal limits (a slope limit `s` on links of lengths
+//! `du` and `dv` bounds the diagonal by `s·√(du² + dv²)`), make the least lift an octagon, under
+//! 8.2 % from round in any direction.
+//!
+//! A pair names the two paths of two links between its ends (a cell's two sides); it holds while
+//! either path is intact, with the intersection of what the intact paths allow. Its bounds follow the
+//! links' boxes (materials tuned live) and their breaking (cuts, tears). Pairs are given as element
+//! pairs and link paths, not as grid arithmetic, so that other meshes can state theirs.
+
+use super::body::{Body, INTACT};
+use super::error::ChainMailError;
+use super::ids::{ElementId, LinkId};
+
+/// A pair as given to [`Body::set_normal_pairs`]: ends `a` and `b` and the two paths of two links
+/// from `a` to `b` (`[a–m, m–b]` each).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NormalPair {
+    /// First end.
+    pub a: ElementId,
+    /// Second end.
+    pub b: ElementId,
+    /// Two paths from `a` to `b`, two links each, in order from `a`.
+    pub paths: [[LinkId; 2]; 2],
+}
+
+/// The body's normal pairs as fixed-width rows beside the links' (a row per element, padded with
+/// the element itself and infinite bounds).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Pairs {
+    /// Pair slots per element (0: the body has no pairs).
+    pub(crate) width: usize,
+    /// Partner of each slot (the owner itself for padding).
+    pub(crate) nbr: Vec<u32>,
+    /// Bounds `[lo, hi]` of each slot on `p[owner][2] - p[nbr][2]` (infinite for padding and for a
+    /// pair with no intact path).
+    pub(crate) bounds: Vec<[f32; 2]>,
+    /// `bounds` widened by the chain reaction's tolerance (`reaction::complete::widen_z`).
+    pub(crate) wide: Vec<[f32; 2]>,
+    /// How far outside a normal pass left a bound of an element it moved (see
+    /// `reaction/complete.rs`): the limits' repair reads it ([`Body::take_pairs_unmet`]).
+    pub(crate) unmet: f32,
+    list: Vec<NormalPair>,
+    /// Each pair's slot in its `a` end's row and in its `b` end's row.
+    slots: Vec<[u32; 2]>,
+    /// The pairs whose paths use each link: `link_pairs[link_start[l]..link_start[l + 1]]`.
+    link_start: Vec<u32>,
+    link_pairs: Vec<u32>,
+}
+
+impl Pairs {
+    /// Whether the body has any pair.
+    #[inline(always)]
+    pub(crate) fn any(&self) -> bool {
+        self.width > 0
+    }
+
+    /// The pair slots of element `i`: partners and bounds on `p[i][2] - p[partner][2]`.
+    #[inline(always)]
+    pub(crate) fn row(&self, i: usize) -> (&[u32], &[[f32; 2]]) {
+        let r = i * self.width..(i + 1) * self.width;
+        (&self.nbr[r.clone()], &self.bounds[r])
+    }
+}
+
+impl Body {
+    /// Sets the body's normal pairs (replacing any it had): each bounds the offset of its ends along
+    /// the third coordinate by what its two-link paths allow there, combined as across a right angle
+    /// (centres added, half-widths as the hypotenuse). Fails on an element or link out of range, or a
+    /// path that does not lead from `a` to `b`.
+    pub fn set_normal_pairs(&mut self, pairs: &[NormalPair]) -> Result<(), ChainMailError> {
+        for p in pairs {
+            self.check_element(p.a)?;
+            self.check_element(p.b)?;
+            for path in &p.paths {
+                for &l in path {
+                    if l.index() >= self.link_state.len() {
+                        return Err(ChainMailError::LinkOutOfRange { id: l.0, count: self.link_state.len() });
+                    }
+                }
+                if self.path_offset(p.a, p.b, *path).is_none() {
+                    return Err(ChainMailError::BadCoordinates {
+                        axis: 2,
+                        reason: format!(
+                            "normal pair {}-{}: path {path:?} does not lead from a to b",
+                            p.a.0, p.b.0
+                        ),
+                    });
+                }
+            }
+        }
+        let n = self.pos.len();
+        let mut degree = vec![0u32; n];
+        for p in pairs {
+            degree[p.a.index()] += 1;
+            degree[p.b.index()] += 1;
+        }
+        let width = if pairs.is_empty() { 0 } else { degree.iter().copied().max().unwrap_or(0) as usize };
+        let mut nbr: Vec<u32> = (0..n * width).map(|k| (k / width.max(1)) as u32).collect();
+        let free = [f32::NEG_INFINITY, f32::INFINITY];
+        let mut bounds = vec![free; n * width];
+        let mut fill = vec![0u32; n];
+        let mut slots = Vec::with_capacity(pairs.len());
+        for p in pairs {
+            let (a, b) = (p.a.index(), p.b.index());
+            let (sa, sb) = (a * width + fill[a] as usize, b * width + fill[b] as usize);
+            fill[a] += 1;
+            fill[b] += 1;
+            nbr[sa] = b as u32;
+            nbr[sb] = a as u32;
+            slots.push([sa as u32, sb as u32]);
+        }
+        let m = self.link_state.len();
+        let mut link_start = vec![0u32; m + 1];
+        for p in pairs {
+            for l in p.paths.iter().flatten() {
+                link_start[l.index() + 1] += 1;
+            }
+        }
+        for l in 0..m {
+            link_start[l + 1] += link_start[l];
+        }
+        let mut at = link_start.clone();
+        let mut link_pairs = vec![0u32; link_start[m] as usize];
+        for (k, p) in pairs.iter().enumerate() {
+            for l in p.paths.iter().flatten() {
+                link_pairs[at[l.index()] as usize] = k as u32;
+                at[l.index()] += 1;
+            }
+        }
+        bounds.shrink_to_fit();
+        let wide = bounds.clone();
+        self.pairs = Pairs {
+            width,
+            nbr,
+            bounds,
+            wide,
+            unmet: 0.0,
+            list: pairs.to_vec(),
+            slots,
+            link_start,
+            link_pairs,
+        };
+        for k in 0..pairs.len() {
+            self.update_pair(k);
+        }
+        self.touch_pairs();
+        Ok(())
+    }
+
+    /// How far outside the normal passes since the last call left a bound of an element they moved (a
+    /// pair's or a link's, no worse than before the pass; infinite where a pass reached its cap),
+    /// and forgets it.
+    pub(crate) fn take_pairs_unmet(&mut self) -> f32 {
+        std::mem::take(&mut self.pairs.unmet)
+    }
+
+    /// The number of normal pairs.
+    pub fn normal_pair_count(&self) -> usize {
+        self.pairs.list.len()
+    }
+
+    /// The bounds `[lo, hi]` of pair `k` on `p[b][2] - p[a][2]` (infinite when neither path is intact).
+    pub fn normal_pair_limits(&self, k: usize) -> Option<(NormalPair, [f32; 2])> {
+        let p = *self.pairs.list.get(k)?;
+        let [_, sb] = self.pairs.slots[k];
+        Some((p, self.pairs.bounds[sb as usize]))
+    }
+
+    /// Recomputes the pairs whose paths use link `l` (its box or state changed).
+    pub(crate) fn update_pairs_of_link(&mut self, l: usize) {
+        if !self.pairs.any() {
+            return;
+        }
+        let (s, e) = (self.pairs.link_start[l] as usize, self.pairs.link_start[l + 1] as usize);
+        for j in s..e {
+            let k = self.pairs.link_pairs[j] as usize;
+            self.update_pair(k);
+        }
+    }
+
+    fn touch_pairs(&mut self) {
+        // Pairs change what relaxation and the chain reaction read: a new revision, as for links.
+        self.revision = super::body::fresh_number();
+    }
+
+    /// Recomputes pair `k`'s bounds from the boxes of its intact paths.
+    fn update_pair(&mut self, k: usize) {
+        let p = self.pairs.list[k];
+        let (mut lo, mut hi) = (f32::NEG_INFINITY, f32::INFINITY);
+        for path in p.paths {
+            if path.iter().all(|l| self.link_state[l.index()] == INTACT)
+                && let Some((l, h)) = self.path_offset(p.a, p.b, path)
+            {
+                lo = lo.max(l);
+                hi = hi.min(h);
+            }
+        }
+        if lo > hi {
+            // Paths that disagree (links of other materials): the looser one's middle, no tighter than
+            // either allows.
+            let m = 0.5 * (lo + hi);
+            (lo, hi) = (m, m);
+        }
+        let [sa, sb] = self.pairs.slots[k];
+        // `b`'s slot bounds `p[b] - p[a]`; `a`'s the negation.
+        self.pairs.bounds[sb as usize] = [lo, hi];
+        self.pairs.bounds[sa as usize] = [-hi, -lo];
+        self.pairs.wide[sb as usize] = super::reaction::widen_z([lo, hi]);
+        self.pairs.wide[sa as usize] = super::reaction::widen_z([-hi, -lo]);
+    }
+
+    /// The bounds of `p[b][2] - p[a][2]` along a path of two links from `a` (`None` if the path does
+    /// not lead from `a` to `b`): the links' centres added, their half-widths as a right angle's
+    /// hypotenuse.
+    fn path_offset(&self, a: ElementId, b: ElementId, path: [LinkId; 2]) -> Option<(f32, f32)> {
+        let mut at = a.0;
+        let (mut centre, mut half2) = (0.0f32, 0.0f32);
+        for l in path {
+            let [x, y] = *self.lattice.ends.get(l.index())?;
+            let [lo, hi] = self.link_box.get(l.index())?;
+            // The box bounds `p[y] - p[x]`.
+            let (l2, h2, next) = if x == at {
+                (lo[2], hi[2], y)
+            } else if y == at {
+                (-hi[2], -lo[2], x)
+            } else {
+                return None;
+            };
+            centre += 0.5 * (l2 + h2);
+            half2 += (0.5 * (h2 - l2)).powi(2);
+            at = next;
+        }
+        let half = half2.sqrt();
+        (at == b.0).then_some((centre - half, centre + half))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Body, BreakReason, ElementId, Lattice, LinkId, Material, Pass, Workspace};
+    use super::NormalPair;
+
+    /// A sheet of `n × n` with both diagonals of every cell as normal pairs.
+    fn sheet_with_pairs(n: usize, d: f32, shear: f32) -> Body {
+        let mut body =
+            Body::new(Lattice::sheet(n, n, d).expect("sheet"), Material::relative(1.2, 0.8, shear))
+                .expect("body");
+        let link = |a: usize, b: usize| {
+            let l = body.lattice().neighbours(ElementId(a as u32)).find(|&(e, _)| e.index() == b);
+            l.map(|(_, l)| l).expect("link")
+        };
+        let mut pairs = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let (a, b, c, e) = (i + n * j, i + 1 + n * j, i + 1 + n * (j + 1), i + n * (j + 1));
+                let (ab, bc, ec, ae) = (link(a, b), link(b, c), link(e, c), link(a, e));
+                let id = |x: usize| ElementId(x as u32);
+                pairs.push(NormalPair { a: id(a), b: id(c), paths: [[ab, bc], [ae, ec]] });
+                pairs.push(NormalPair { a: id(b), b: id(e), paths: [[ab, ae], [bc, ec]] });
+            }
+        }
+        body.set_normal_pairs(&pairs).expect("pairs");
+        body
+    }
+
+    #[test]
+    fn a_point_lift_over_pairs_is_an_octagon() {
+        let (n, d, s, h) = (41, 0.001f32, 0.25f32, 0.004f32);
+        let mut body = sheet_with_pairs(n, d, s);
+        let mut ws = Workspace::new(&body);
+        let c = n / 2;
+        let centre = ElementId((c + n * c) as u32);
+        let moved = body.deform(&mut ws, centre, [0.02, 0.02, h], Pass::Normal).expect("lift");
+        assert_eq!(moved.fraction, 1.0);
+        // The least lift: the centre's height less the slope limit times the octagonal distance.
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = ((i as f32 - c as f32).abs(), (j as f32 - c as f32).abs());
+                let oct = x.max(y) + (2f32.sqrt() - 1.0) * x.min(y);
+                let want = (h - s * d * oct).max(0.0);
+                let z = body.positions()[i + n * j][2];
+                assert!((z - want).abs() < 1e-6, "({i}, {j}): {z} against {want}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_pair_holds_while_one_path_is_intact() {
+        let mut body = sheet_with_pairs(3, 0.001, 0.25);
+        let (p, [lo, hi]) = body.normal_pair_limits(0).expect("pair");
+        assert!((hi - 0.25e-3 * 2f32.sqrt()).abs() < 1e-9 && lo == -hi, "{lo} {hi}");
+        body.break_link(p.paths[0][0], BreakReason::Cut).expect("cut");
+        assert_eq!(body.normal_pair_limits(0).map(|x| x.1), Some([lo, hi]), "the other path holds it");
+        body.break_link(p.paths[1][1], BreakReason::Cut).expect("cut");
+        let (_, [lo, hi]) = body.normal_pair_limits(0).expect("pair");
+        assert!(lo == f32::NEG_INFINITY && hi == f32::INFINITY, "no path left: {lo} {hi}");
+        assert!(
+            body.set_normal_pairs(&[NormalPair { a: p.a, b: p.b, paths: [[LinkId(0), LinkId(0)]; 2] }])
+                .is_err()
+        );
+    }
+}
