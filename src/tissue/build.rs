@@ -529,7 +529,11 @@ impl Tissue {
             .into_iter()
             .map(|(kind, ids)| (kind, super::link_grid::LinkGrid::new(&body, &ids, wrapped)))
             .collect();
-        let scan_table = super::scan::ScanTable::new(&body, &link_kind, &rest_len);
+        // Only a flat surface's tear scan reads the table (see `scan.rs`).
+        let scan_table = match geometry {
+            Geometry::Surface(s) if s.is_flat() => super::scan::ScanTable::new(&body, &link_kind, &rest_len),
+            _ => super::scan::ScanTable::default(),
+        };
         let mut tissue = Tissue {
             scan_table,
             kind_links,
