@@ -378,14 +378,7 @@ fn follow(m: &mut Moves<'_>, flags: &[u8], Bound { x, y, lo, hi }: Bound) -> Opt
         return Some(Met::Held);
     }
     let wx = if m.stamp[x] == m.g { m.old[x][2] } else { zx };
-    let db = wx - zy;
-    let before = if db > hi {
-        db - hi
-    } else if db < lo {
-        db - lo
-    } else {
-        0.0
-    };
+    let before = outside_by(wx - zy, lo, hi);
     if over.abs() <= before.abs() + tol {
         return Some(Met::Unmet(over.abs()));
     }
@@ -402,6 +395,19 @@ fn follow(m: &mut Moves<'_>, flags: &[u8], Bound { x, y, lo, hi }: Bound) -> Opt
     Some(Met::Moved(y))
 }
 
+/// The signed amount by which `d` lies outside `[lo, hi]` (0 within): how far outside a bound was
+/// before the reaction moved its ends.
+#[inline(always)]
+fn outside_by(d: f32, lo: f32, hi: f32) -> f32 {
+    if d > hi {
+        d - hi
+    } else if d < lo {
+        d - lo
+    } else {
+        0.0
+    }
+}
+
 /// Meets a bound found outside (see the module's comment): the end this reaction moved less in the
 /// direction of the excess follows the other. (Out of the loops: most bounds they test hold.)
 #[inline(never)]
@@ -416,14 +422,7 @@ fn meet(m: &mut Moves<'_>, flags: &[u8], Bound { x, y, lo, hi }: Bound) -> Met {
     }
     let was = |i: usize, p: f32| if m.stamp[i] == m.g { m.old[i][2] } else { p };
     let (wx, wy) = (was(x, zx), was(y, zy));
-    let db = wx - wy;
-    let before = if db > hi {
-        db - hi
-    } else if db < lo {
-        db - lo
-    } else {
-        0.0
-    };
+    let before = outside_by(wx - wy, lo, hi);
     // No worse than before the reaction: not this reaction's doing (the limits' repair sees to it).
     if over.abs() <= before.abs() + tol {
         return Met::Unmet(over.abs());

@@ -65,19 +65,6 @@ impl Body {
         let p = pos_of(i);
         let (w, rest) = (self.width, &self.lattice.rest);
         let row = i * w..(i + 1) * w;
-        if !self.pairs.any() {
-            return Some(relaxed_bounded(
-                &pos_of,
-                p,
-                rest[i],
-                &self.slot_nbr[row.clone()],
-                &self.slot_class[row],
-                &self.classes,
-                |_, j| rest[j],
-            ));
-        }
-        // Normal pairs bound the normal coordinate too: the intersection with theirs, and the step
-        // shortened to it as to the links' (never further out than the element is, never backwards).
         let (q, mut lo, mut hi) = relaxed_bounded(
             &pos_of,
             p,
@@ -87,6 +74,11 @@ impl Body {
             &self.classes,
             |_, j| rest[j],
         );
+        if !self.pairs.any() {
+            return Some((q, lo, hi));
+        }
+        // Normal pairs bound the normal coordinate too: the intersection with theirs, and the step
+        // shortened to it as to the links' (never further out than the element is, never backwards).
         let (nbrs, bounds) = self.pairs.row(i);
         for (&j, &[blo, bhi]) in nbrs.iter().zip(bounds) {
             let z = pos_of(j as usize)[2];
