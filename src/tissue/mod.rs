@@ -220,6 +220,8 @@ pub struct Tissue {
     pub(crate) drift_at: Option<u64>,
     /// Scratch of the tear check: each material's tear ratio, squared.
     pub(crate) tear_scratch: Vec<Option<f32>>,
+    /// The same ratios, infinite for none (the flat scan's).
+    pub(crate) ratio_scratch: Vec<f32>,
     /// The links a tear check found past their tear ratio, broken after the scan.
     pub(crate) tear_hits: Vec<LinkId>,
     /// What the limits' repair's scan of the region found this step (with `tear_hits` and
@@ -779,6 +781,10 @@ impl Tissue {
         let mut tear2 = std::mem::take(&mut self.tear_scratch);
         tear2.clear();
         tear2.extend(self.body.materials().iter().map(|m| m.tear_ratio.map(|r| r * r)));
+        // The same, infinite for a material that does not tear (the flat scan's form).
+        let mut ratio2 = std::mem::take(&mut self.ratio_scratch);
+        ratio2.clear();
+        ratio2.extend(tear2.iter().map(|r| r.unwrap_or(f32::INFINITY)));
         let mut hits = std::mem::take(&mut self.tear_hits);
         hits.clear();
         // Each slot class's box widened by the tolerance (a handful of classes).
@@ -796,13 +802,13 @@ impl Tissue {
         let mut out = ScanFound { keep: boxes.is_some().then_some(&mut keep), ..Default::default() };
         let max2 = match (geometry, boxes) {
             (Geometry::Surface(s), None) if s.is_flat() => {
-                let m = self.scan_flat::<false>(&tear2, &mut hits, &NO_BOXES, &wide, &mut out);
+                let m = self.scan_flat::<false>(&ratio2, &mut hits, &NO_BOXES, &wide, &mut out);
                 #[cfg(debug_assertions)]
                 self.check_scan::<false>(&tear2, &hits, flat, &NO_BOXES, &wide, &out, m);
                 m
             }
             (Geometry::Surface(s), Some(b)) if s.is_flat() => {
-                let m = self.scan_flat::<true>(&tear2, &mut hits, &b, &wide, &mut out);
+                let m = self.scan_flat::<true>(&ratio2, &mut hits, &b, &wide, &mut out);
                 #[cfg(debug_assertions)]
                 self.check_scan::<true>(&tear2, &hits, flat, &b, &wide, &out, m);
                 m
@@ -812,6 +818,7 @@ impl Tissue {
         };
         let (outside, drift) = (out.outside, out.drift);
         self.tear_scratch = tear2;
+        self.ratio_scratch = ratio2;
         self.tear_hits = hits;
         self.wide_scratch = wide;
         self.scan_keep = keep;

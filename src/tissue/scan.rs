@@ -5,7 +5,9 @@
 //! ends, skipped one by one) and four link-indexed arrays. [`Tissue::scan_region`] is the plain path;
 //! in debug builds every scan compares the two.
 
-use super::{BoxCheck, LinkKind, ScanFound, Tissue, limits, settle, tear_test};
+use super::{BoxCheck, LinkKind, NEAR, ScanFound, Tissue, limits, settle};
+use std::cmp::Ordering;
+
 use crate::chainmail::{Body, INTACT, LinkId, SIDE_B_BIT};
 
 /// Set in [`ScanLink::link`] for a link within a layer (whose stretch the scan reports).
@@ -65,11 +67,16 @@ impl ScanTable {
 impl Tissue {
     /// [`Tissue::scan_region`] on a flat surface, whose world is its lattice with the axes permuted
     /// (`Surface::flat_to_world`: lengths are summed in the world's order, so every figure is the plain
-    /// path's to the bit), reading the scan table.
+    /// path's to the bit), reading the scan table. `ratio2` is each material's squared tear ratio
+    /// (infinite for none).
+    ///
+    /// Most links hold nothing of interest: inside their box, and neither the largest stretch so far
+    /// nor near their tear ratio. The loop tests both with a few comparisons and sends the rest to
+    /// [`Tissue::scan_link`] out of its way, so that it keeps its values in registers.
     #[inline(always)]
     pub(super) fn scan_flat<const BOXES: bool>(
         &self,
-        tear2: &[Option<f32>],
+        ratio2: &[f32],
         hits: &mut Vec<LinkId>,
         boxes: &BoxCheck<'_>,
         wide: &[[[f32; 3]; 2]],
@@ -85,6 +92,7 @@ impl Tissue {
         let (rest_pos, last_move) = (lat.rest_positions(), &self.last_move[..]);
         let moving = |i: usize| last_move.get(i).is_some_and(|&m| m > settle::SETTLED);
         let mut max_stretch2 = 0.0f32;
+        let mut drift = out.drift;
         for &id in &self.active {
             let e = id.index();
             let (Some(&t0), Some(&t1), Some(&p)) = (start.get(e), start.get(e + 1), pos.get(e)) else {
@@ -94,7 +102,14 @@ impl Tissue {
             let mut moved_e = false;
             if BOXES {
                 if let Some(r) = rest_pos.get(e) {
-                    out.drift = out.drift.max((p[0] - r[0]).abs().max((p[1] - r[1]).abs()));
+                    // `drift.max(..)` for a drift that is never NaN: a NaN leaves it as it was.
+                    let (du, dv) = ((p[0] - r[0]).abs(), (p[1] - r[1]).abs());
+                    if du > drift {
+                        drift = du;
+                    }
+                    if dv > drift {
+                        drift = dv;
+                    }
                     keep = moving(e);
                 }
                 if !keep && let (Some(&s0), Some(&s1)) = (adj_start.get(e), adj_start.get(e + 1)) {
@@ -108,33 +123,47 @@ impl Tissue {
                 if state.get(l) != Some(&INTACT) {
                     continue;
                 }
-                let y = k.nbr as usize;
-                let Some(&q) = pos.get(y) else { continue };
-                if BOXES {
-                    let class = slot_class.get(k.slot as usize).copied().unwrap_or(0) as usize;
-                    if let Some(&wide) = wide.get(class)
-                        && limits::beyond(p, q, wide)
-                        && (moved_e || moved(y))
-                    {
-                        out.outside = true;
-                    }
-                }
+                let Some(&q) = pos.get(k.nbr as usize) else { continue };
                 // `world(q).distance_squared(world(p))` with the world's axes `(u, h, v)`.
                 let d = [q[0] - p[0], q[2] - p[2], q[1] - p[1]];
                 let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                let ratio =
+                    material.get(l).and_then(|m| ratio2.get(m.index())).copied().unwrap_or(f32::INFINITY);
                 let layer = k.link & LAYER != 0;
-                let ratio2 = material
-                    .get(l)
-                    .and_then(|m| tear2.get(m.index()).copied().flatten())
-                    .unwrap_or(f32::INFINITY);
-                tear_test(d2, k.rest2, ratio2, layer, &mut max_stretch2, || {
-                    hits.push(LinkId(k.link & !LAYER))
-                });
+                // `tear_test`'s first comparison (a NaN goes on, as there).
+                let bar = if layer { ratio.min(max_stretch2) } else { ratio };
+                let near = matches!(d2.partial_cmp(&(bar * k.rest2 * NEAR)), Some(Ordering::Greater) | None);
+                let outside = BOXES && {
+                    let class = slot_class.get(k.slot as usize).copied().unwrap_or(0) as usize;
+                    wide.get(class).is_some_and(|&w| limits::beyond(p, q, w))
+                };
+                if near || outside {
+                    let moved_y = BOXES && outside && (moved_e || moved(k.nbr as usize));
+                    out.outside |= moved_y;
+                    if near {
+                        scan_link(k, d2, ratio, &mut max_stretch2, hits);
+                    }
+                }
             }
             if keep && let Some(k) = out.keep.as_deref_mut() {
                 k.push(id);
             }
         }
+        out.drift = drift;
         max_stretch2
+    }
+}
+
+/// `tear_test` of a link the scan found near the bar (`d2` past the bar's multiplication test):
+/// the division, the largest stretch and the tear, out of the scan's loop.
+#[cold]
+#[inline(never)]
+fn scan_link(k: &ScanLink, d2: f32, ratio2: f32, max_stretch2: &mut f32, hits: &mut Vec<LinkId>) {
+    let stretch2 = d2 / k.rest2;
+    if k.link & LAYER != 0 {
+        *max_stretch2 = max_stretch2.max(stretch2);
+    }
+    if stretch2 > ratio2 {
+        hits.push(LinkId(k.link & !LAYER));
     }
 }
