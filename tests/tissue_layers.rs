@@ -5,7 +5,7 @@
 mod common;
 
 use common::{GAP, WIDTH, plane};
-use dissect::chainmail::{ElementId, RelaxBudget};
+use dissect::chainmail::{ElementId, Limits, LinkId, RelaxBudget};
 use dissect::simulation::Command;
 use dissect::simulation::{InstrumentKind, World, WorldConfig};
 use dissect::tissue::{CutDepth, CutSegment, LinkKind, Tissue};
@@ -206,4 +206,38 @@ fn a_blocked_lift_stays_blocked_and_is_the_same_as_searching_every_step() {
     remembered.push(Command::MoveTo([start[0], top - 0.001, start[2]]));
     remembered.step();
     assert!(height(remembered.tissue(), e) < top - 0.0009, "came down to {}", height(remembered.tissue(), e));
+}
+
+/// Editing a material in the middle of a lift (an educator's live tuning): the tightened shear puts the
+/// tent's links outside their new boxes, and the limits' repair brings every link back within them (the
+/// lift stays within what the new shear allows between the grasp and the pinned edge: 12 links at 0.2
+/// of 2.5 mm is 6 mm). Debug builds compare the tear scan with its plain path at every step; that the
+/// scan's table follows the edit is `tissue::scan`'s own test.
+#[test]
+fn a_material_edited_mid_lift_holds_its_new_limits() {
+    let tissue = plane(N);
+    let mut world = world_with_grasp(tissue, [0.0, GAP, 0.0]);
+    lift(&mut world, 0.003, 20);
+    let upper = world.tissue().body().link_material(link_of_layer(world.tissue(), UPPER)).expect("material");
+    let mut m = *world.tissue().body().material(upper).expect("material");
+    m.limits = Limits::Relative { max_stretch: 1.1, min_compress: 0.9, max_shear: 0.2 };
+    world.push(Command::SetMaterial(upper, m));
+    world.step();
+    lift(&mut world, 0.001, 10);
+    // No intact link further outside its box than the limits' repair's tolerance.
+    let body = world.tissue().body();
+    let spacing = WIDTH / (N - 1) as f32;
+    let worst = (0..body.link_count() as u32)
+        .map(LinkId)
+        .filter(|&l| body.link_intact(l))
+        .map(|l| body.link_violation(l).unwrap_or(0.0))
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-3 * spacing, "a link is {worst} m outside the edited material's limits");
+}
+
+fn link_of_layer(t: &Tissue, layer: usize) -> LinkId {
+    (0..t.body().lattice().link_count() as u32)
+        .map(LinkId)
+        .find(|&l| t.link_kind(l) == Some(LinkKind::Layer(layer as u8)))
+        .expect("a layer link")
 }

@@ -64,6 +64,10 @@ pub struct Body {
     /// Which pins, holds, cuts and materials the body has: a new number on each change, shared only
     /// by clones with the same ones. A workspace's grid tables are rebuilt when it changes.
     pub(crate) revision: u64,
+    /// A fresh number whenever a link's box, its slots' classes or its material may have changed (and
+    /// the class table renumbered): what a cache of them (the tear scan's table) is keyed by. Cuts
+    /// and tears leave it be (they change the broken link's slots only, which no cache reads).
+    pub(crate) boxes_epoch: u64,
     /// How often positions changed: a new count whenever any element may have moved (a chain
     /// reaction that kept moves, a relaxation, a direct write). What a blocked pull measured stays
     /// true while it and the revision stay the same.
@@ -140,6 +144,7 @@ impl Body {
             lattice,
             shape: fresh_number(),
             revision: 0,
+            boxes_epoch: 0,
             motion: 0,
             pairs: Default::default(),
         };
@@ -157,6 +162,7 @@ impl Body {
 
     fn update_link_box(&mut self, l: usize) {
         self.touch();
+        self.boxes_epoch = self.revision;
         let lat = &self.lattice;
         let mat = &self.materials[self.link_material[l].index()];
         let (lo, hi) = mat.link_box(lat.rest_offset[l], lat.axis[l] as usize, lat.scale[l]);

@@ -799,6 +799,9 @@ impl Tissue {
         #[cfg(debug_assertions)]
         let flat = |p| Vec3::from(Surface::flat_to_world(p));
         let general = |p| Vec3::from(geometry.to_world(p));
+        if matches!(geometry, Geometry::Surface(s) if s.is_flat()) {
+            self.scan_table.refresh(&self.body);
+        }
         let mut out = ScanFound { keep: boxes.is_some().then_some(&mut keep), ..Default::default() };
         let max2 = match (geometry, boxes) {
             (Geometry::Surface(s), None) if s.is_flat() => {
