@@ -130,17 +130,20 @@ impl Tissue {
             !scanned || keep.iter().eq(self.active.iter().filter(kept)),
             "the scan's region differs from the plain prune's"
         );
+        // What is kept is a subsequence of the region (in its order): one pass over the region, a
+        // cursor in what is kept, forgets the rest.
+        let mut kept_at = keep.iter().peekable();
         for &e in &self.active {
-            self.in_active[e.index()] = false;
-        }
-        for &e in &keep {
-            self.in_active[e.index()] = true;
-        }
-        for &e in &self.active {
-            if !self.in_active[e.index()] {
-                self.last_move[e.index()] = 0.0;
+            if kept_at.next_if_eq(&&e).is_none() {
+                if let Some(a) = self.in_active.get_mut(e.index()) {
+                    *a = false;
+                }
+                if let Some(m) = self.last_move.get_mut(e.index()) {
+                    *m = 0.0;
+                }
             }
         }
+        debug_assert!(kept_at.next().is_none(), "the kept elements are not a subsequence of the region");
         std::mem::swap(&mut self.active, &mut keep);
         self.region_scratch = keep;
     }
