@@ -681,10 +681,26 @@ impl Tissue {
         }
         let mut fixed = 0;
         let count = self.active.len();
-        for k in 0..count {
+        let mut next = 0;
+        while next < count {
             // Either element of a pair may be the disturbed one (a grasped lower layer pushed up into
-            // an upper layer cut free of it moves only itself).
-            let e = self.active[k];
+            // an upper layer cut free of it moves only itself). Most pairs keep their gap: they are
+            // passed over reading the positions' array alone (the same test as below: a NaN gap is
+            // short).
+            let (pos, sheet, min_gap) = (&self.body.pos[..], self.sheet, self.min_gap);
+            let short_at = self.active[next..count].iter().position(|&e| {
+                let lower = if e.0 >= sheet { e.0 - sheet } else { e.0 } as usize;
+                match (pos.get(lower), pos.get(lower + sheet as usize)) {
+                    (Some(pl), Some(pu)) => !matches!(
+                        (pu[2] - pl[2]).partial_cmp(&min_gap),
+                        Some(std::cmp::Ordering::Greater | std::cmp::Ordering::Equal)
+                    ),
+                    _ => false,
+                }
+            });
+            let Some(at) = short_at else { break };
+            let e = self.active[next + at];
+            next += at + 1;
             let lower = ElementId(if e.0 >= self.sheet { e.0 - self.sheet } else { e.0 });
             let upper = ElementId(lower.0 + self.sheet);
             let (Ok(pl), Ok(pu)) = (self.body.position(lower), self.body.position(upper)) else { continue };
