@@ -41,8 +41,6 @@ pub(crate) struct Pairs {
     /// Bounds `[lo, hi]` of each slot on `p[owner][2] - p[nbr][2]` (infinite for padding and for a
     /// pair with no intact path).
     pub(crate) bounds: Vec<[f32; 2]>,
-    /// `bounds` widened by the chain reaction's tolerance (`reaction::complete::widen_z`).
-    pub(crate) wide: Vec<[f32; 2]>,
     /// How far outside a normal pass left a bound of an element it moved (see
     /// `reaction/complete.rs`): the limits' repair reads it ([`Body::take_pairs_unmet`]).
     pub(crate) unmet: f32,
@@ -135,18 +133,8 @@ impl Body {
             }
         }
         bounds.shrink_to_fit();
-        let wide = bounds.clone();
-        self.pairs = Pairs {
-            width,
-            nbr,
-            bounds,
-            wide,
-            unmet: 0.0,
-            list: pairs.to_vec(),
-            slots,
-            link_start,
-            link_pairs,
-        };
+        self.pairs =
+            Pairs { width, nbr, bounds, unmet: 0.0, list: pairs.to_vec(), slots, link_start, link_pairs };
         for k in 0..pairs.len() {
             self.update_pair(k);
         }
@@ -212,8 +200,6 @@ impl Body {
         // `b`'s slot bounds `p[b] - p[a]`; `a`'s the negation.
         self.pairs.bounds[sb as usize] = [lo, hi];
         self.pairs.bounds[sa as usize] = [-hi, -lo];
-        self.pairs.wide[sb as usize] = super::reaction::widen_z([lo, hi]);
-        self.pairs.wide[sa as usize] = super::reaction::widen_z([-hi, -lo]);
     }
 
     /// The bounds of `p[b][2] - p[a][2]` along a path of two links from `a` (`None` if the path does

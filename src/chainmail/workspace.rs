@@ -31,10 +31,10 @@ pub struct Workspace {
     /// The search for the largest move allowed.
     pub(crate) search: SearchScratch,
     /// The normal pairs' completion of a normal pass (`reaction/complete.rs`): a bit per element
-    /// waiting to be checked, the links' normal bounds widened per slot class and the body's revision
-    /// and class count they were widened for.
+    /// waiting to be checked, the links' normal bounds per slot class (widened and as they are, padded
+    /// to a power of two) and the body's revision and class count they were made for.
     pub(crate) pair_bits: Vec<u64>,
-    pub(crate) class_z: Vec<[f32; 2]>,
+    pub(crate) class_z: Vec<[f32; 4]>,
     pub(crate) class_z_key: (u64, usize),
     /// The completion takes its plain path whatever the widths (for the tests that compare the two).
     pub(crate) plain_pairs: bool,

@@ -17,7 +17,6 @@ use runs::{Wide, batch};
 mod arrays;
 mod chunk;
 mod complete;
-pub(crate) use complete::widen_z;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 mod runs;
