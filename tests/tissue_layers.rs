@@ -5,7 +5,7 @@
 mod common;
 
 use common::{GAP, WIDTH, plane};
-use dissect::chainmail::{ElementId, Limits, LinkId, RelaxBudget};
+use dissect::chainmail::{ElementId, Limits, LinkId, Material, RelaxBudget};
 use dissect::simulation::Command;
 use dissect::simulation::{InstrumentKind, World, WorldConfig};
 use dissect::tissue::{CutDepth, CutSegment, LinkKind, Tissue};
@@ -215,24 +215,27 @@ fn a_blocked_lift_stays_blocked_and_is_the_same_as_searching_every_step() {
 /// scan's table follows the edit is `tissue::scan`'s own test.
 #[test]
 fn a_material_edited_mid_lift_holds_its_new_limits() {
-    let tissue = plane(N);
-    let mut world = world_with_grasp(tissue, [0.0, GAP, 0.0]);
-    lift(&mut world, 0.003, 20);
-    let upper = world.tissue().body().link_material(link_of_layer(world.tissue(), UPPER)).expect("material");
-    let mut m = *world.tissue().body().material(upper).expect("material");
-    m.limits = Limits::Relative { max_stretch: 1.1, min_compress: 0.9, max_shear: 0.2 };
-    world.push(Command::SetMaterial(upper, m));
+    let mut world = upper_edited_mid_lift(
+        0.003,
+        Limits::Relative { max_stretch: 1.1, min_compress: 0.9, max_shear: 0.2 },
+    );
     world.step();
     lift(&mut world, 0.001, 10);
     // No intact link further outside its box than the limits' repair's tolerance.
-    let body = world.tissue().body();
     let spacing = WIDTH / (N - 1) as f32;
-    let worst = (0..body.link_count() as u32)
-        .map(LinkId)
-        .filter(|&l| body.link_intact(l))
-        .map(|l| body.link_violation(l).unwrap_or(0.0))
-        .fold(0.0f32, f32::max);
+    let worst = worst_violation(world.tissue());
     assert!(worst < 1e-3 * spacing, "a link is {worst} m outside the edited material's limits");
+}
+
+/// The upper layer's centre grasped and lifted `by`, and the upper layer's material's limits set to
+/// `limits` (applied at the next step).
+fn upper_edited_mid_lift(by: f32, limits: Limits) -> World {
+    let mut world = world_with_grasp(plane(N), [0.0, GAP, 0.0]);
+    lift(&mut world, by, 20);
+    let upper = world.tissue().body().link_material(link_of_layer(world.tissue(), UPPER)).expect("material");
+    let m = *world.tissue().body().material(upper).expect("material");
+    world.push(Command::SetMaterial(upper, Material { limits, ..m }));
+    world
 }
 
 fn link_of_layer(t: &Tissue, layer: usize) -> LinkId {
@@ -240,4 +243,36 @@ fn link_of_layer(t: &Tissue, layer: usize) -> LinkId {
         .map(LinkId)
         .find(|&l| t.link_kind(l) == Some(LinkKind::Layer(layer as u8)))
         .expect("a layer link")
+}
+
+/// An edit that the grasp and the pins cannot all meet (the dura's centre held 4 mm up, its shear cut to
+/// 0.1: at most 12 links of 2.5 mm at 0.1 above the rest height to the pinned edge, 3 mm): nothing
+/// moves, so the repair is told to check every link (`Tissue::limits_changed`), and within three
+/// steps the held element has slipped to what the new limits allow and every link is within them.
+/// Before, the links next to the grasp stayed half a millimetre outside, step after step.
+#[test]
+fn an_edit_the_grasp_cannot_meet_makes_the_grasp_slip() {
+    let mut world = upper_edited_mid_lift(
+        0.004,
+        Limits::Relative { max_stretch: 1.05, min_compress: 0.95, max_shear: 0.1 },
+    );
+    for _ in 0..3 {
+        world.step();
+    }
+    let spacing = WIDTH / (N - 1) as f32;
+    let worst = worst_violation(world.tissue());
+    assert!(worst < 1e-3 * spacing, "a link is {worst} m outside the edited material's limits");
+    let grasped = world.instrument().grasped.expect("still grasped");
+    let top = GAP + 12.0 * 0.1 * spacing;
+    assert!(height(world.tissue(), grasped) <= top + 1e-6, "the grasp did not slip to {top} m");
+}
+
+/// The largest distance of an intact link outside its box.
+fn worst_violation(t: &Tissue) -> f32 {
+    let body = t.body();
+    (0..body.link_count() as u32)
+        .map(LinkId)
+        .filter(|&l| body.link_intact(l))
+        .map(|l| body.link_violation(l).unwrap_or(0.0))
+        .fold(0.0f32, f32::max)
 }

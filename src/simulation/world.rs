@@ -347,11 +347,11 @@ impl World {
 
     fn apply(&mut self, command: Command) {
         match command {
-            Command::SetMaterial(id, m) => {
-                if let Err(e) = self.tissue.body_mut().set_material(id, m) {
-                    self.tissue.notice = Some(format!("material refused: {e}"));
-                }
-            }
+            Command::SetMaterial(id, m) => match self.tissue.body_mut().set_material(id, m) {
+                // Links may now lie outside their new boxes: this step's repair checks them all.
+                Ok(()) => self.tissue.limits_changed(),
+                Err(e) => self.tissue.notice = Some(format!("material refused: {e}")),
+            },
             Command::SetRelaxSweeps(n) => self.config.relax.max_sweeps = n,
             Command::Select(kind) => {
                 // What the forceps hold stays clamped while another instrument is in use (two-handed

@@ -105,6 +105,17 @@ impl Repair {
         }
     }
 
+    /// Makes every element one of this step's carried suspects: its links are checked against their
+    /// boxes whatever the step moves (after a material edit any box may have changed, and nothing
+    /// need move for a link to be outside its new one).
+    pub(crate) fn suspect_all(&mut self, n: usize) {
+        self.fit(n);
+        // Carried suspects come first; every element is one, so the step's own moves need not be.
+        self.suspects.clear();
+        self.suspects.extend(0..n as u32);
+        self.carried = n;
+    }
+
     /// Notes that element `e`, at `was` before, is about to move or has moved this step.
     #[inline]
     pub(crate) fn note(&mut self, e: u32, was: [f32; 3]) {
@@ -302,6 +313,17 @@ impl Tissue {
         }
         self.repair = r;
         moves
+    }
+
+    /// Has this step's repair check every element's links against their boxes: for a material edit,
+    /// which may leave links outside their new boxes where nothing moves (an educator tightening the
+    /// limits under a held lift). Costs one check of the whole body, once.
+    pub fn limits_changed(&mut self) {
+        if self.is_fem() {
+            return;
+        }
+        self.repair.suspect_all(self.body.element_count());
+        self.settled = false;
     }
 
     /// Which end of a link (or contact) between `x` and `y` follows the other along coordinate `k`,
