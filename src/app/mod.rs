@@ -384,7 +384,7 @@ fn split(area: egui::Rect, single: bool) -> (egui::Rect, Option<egui::Rect>) {
 fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let camera = state.trainee.camera.camera;
     let pointer = state.trainee.pointer;
-    // The tissue under the cursor, where the hand reads it (rebuilding the picker costs a frame).
+    // The tissue under the cursor, where the hand reads it (a pull or a push need not refresh the picker).
     let (ray, hit) = if press || state.hand.reads_tissue(session.world()) {
         session.refresh_picker();
         input::pick(&session.picker, session.snapshot(), &camera, &pointer)

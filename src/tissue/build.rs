@@ -541,7 +541,6 @@ impl Tissue {
             drift_max: 0.0,
             drift_at: None,
             tear_scratch: Vec::new(),
-            ratio_scratch: Vec::new(),
             tear_hits: Vec::new(),
             region_scan: None,
             scan_keep: Vec::with_capacity(n),

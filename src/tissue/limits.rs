@@ -448,7 +448,7 @@ pub(crate) fn beyond(px: [f32; 3], py: [f32; 3], [lo, hi]: [[f32; 3]; 2]) -> boo
 
 /// The lower and upper element of the layer pair element `i` belongs to (`sheet` elements apart).
 #[inline(always)]
-fn partners(i: usize, sheet: u32) -> (usize, usize) {
+pub(super) fn partners(i: usize, sheet: u32) -> (usize, usize) {
     let s = sheet as usize;
     if i >= s { (i - s, i) } else { (i, i + s) }
 }

@@ -73,20 +73,33 @@ const NEAR: f32 = 1.0 - 1e-6;
 /// ratio `ratio2`): a layer's link raises `max_stretch2`, a link past its ratio is `hit`.
 #[inline(always)]
 fn tear_test(d2: f32, rest2: f32, ratio2: f32, layer: bool, max_stretch2: &mut f32, hit: impl FnOnce()) {
-    // Most links are neither the largest stretch so far nor past their tear ratio: a multiplication
-    // tells, a little on the safe side (`NEAR` lets through every link whose quotient below could
-    // round above the bar), so the division runs only near the bar and its results are exactly those
-    // of dividing every link.
-    let bar = if layer { ratio2.min(*max_stretch2) } else { ratio2 };
-    // (A NaN goes on to the division, as it always did.)
-    if matches!(d2.partial_cmp(&(bar * rest2 * NEAR)), Some(std::cmp::Ordering::Greater) | None) {
-        let stretch2 = d2 / rest2;
-        if layer {
-            *max_stretch2 = max_stretch2.max(stretch2);
-        }
-        if stretch2 > ratio2 {
-            hit();
-        }
+    if near_bar(d2, rest2, ratio2, layer, *max_stretch2) {
+        tear_divide(d2, rest2, ratio2, layer, max_stretch2, hit);
+    }
+}
+
+/// The first half of [`tear_test`]: whether the link may be the largest stretch so far or past its
+/// tear ratio. Most links are neither: a multiplication tells, a little on the safe side (`NEAR` lets
+/// through every link whose quotient could round above the bar), so the division runs only near the
+/// bar and its results are exactly those of dividing every link. The bar is `ratio2.min(max_stretch2)`
+/// for a layer's link: neither is ever NaN (a validated material's ratio, and the largest stretch
+/// never takes a NaN), so a comparison does. A NaN length goes on to the division.
+#[inline(always)]
+fn near_bar(d2: f32, rest2: f32, ratio2: f32, layer: bool, max_stretch2: f32) -> bool {
+    let bar = if layer && max_stretch2 < ratio2 { max_stretch2 } else { ratio2 };
+    matches!(d2.partial_cmp(&(bar * rest2 * NEAR)), Some(std::cmp::Ordering::Greater) | None)
+}
+
+/// The second half of [`tear_test`], for a link near its bar: the division, the largest stretch and
+/// the tear.
+#[inline(always)]
+fn tear_divide(d2: f32, rest2: f32, ratio2: f32, layer: bool, max_stretch2: &mut f32, hit: impl FnOnce()) {
+    let stretch2 = d2 / rest2;
+    if layer {
+        *max_stretch2 = max_stretch2.max(stretch2);
+    }
+    if stretch2 > ratio2 {
+        hit();
     }
 }
 
@@ -218,10 +231,8 @@ pub struct Tissue {
     /// the body that was measured.
     pub(crate) drift_max: f32,
     pub(crate) drift_at: Option<u64>,
-    /// Scratch of the tear check: each material's tear ratio, squared.
-    pub(crate) tear_scratch: Vec<Option<f32>>,
-    /// The same ratios, infinite for none (the flat scan's).
-    pub(crate) ratio_scratch: Vec<f32>,
+    /// Scratch of the tear check: each material's tear ratio, squared (infinite for none).
+    pub(crate) tear_scratch: Vec<f32>,
     /// The links a tear check found past their tear ratio, broken after the scan.
     pub(crate) tear_hits: Vec<LinkId>,
     /// What the limits' repair's scan of the region found this step (with `tear_hits` and
@@ -685,12 +696,12 @@ impl Tissue {
         while next < count {
             // Either element of a pair may be the disturbed one (a grasped lower layer pushed up into
             // an upper layer cut free of it moves only itself). Most pairs keep their gap: they are
-            // passed over reading the positions' array alone (the same test as below: a NaN gap is
-            // short).
+            // passed over reading the positions' array alone, and only a short gap (or a NaN one) is
+            // handled below.
             let (pos, sheet, min_gap) = (&self.body.pos[..], self.sheet, self.min_gap);
             let short_at = self.active[next..count].iter().position(|&e| {
-                let lower = if e.0 >= sheet { e.0 - sheet } else { e.0 } as usize;
-                match (pos.get(lower), pos.get(lower + sheet as usize)) {
+                let (l, u) = limits::partners(e.index(), sheet);
+                match (pos.get(l), pos.get(u)) {
                     (Some(pl), Some(pu)) => !matches!(
                         (pu[2] - pl[2]).partial_cmp(&min_gap),
                         Some(std::cmp::Ordering::Greater | std::cmp::Ordering::Equal)
@@ -699,15 +710,11 @@ impl Tissue {
                 }
             });
             let Some(at) = short_at else { break };
-            let e = self.active[next + at];
+            let (l, u) = limits::partners(self.active[next + at].index(), self.sheet);
             next += at + 1;
-            let lower = ElementId(if e.0 >= self.sheet { e.0 - self.sheet } else { e.0 });
-            let upper = ElementId(lower.0 + self.sheet);
-            let (Ok(pl), Ok(pu)) = (self.body.position(lower), self.body.position(upper)) else { continue };
+            let (lower, upper) = (ElementId(l as u32), ElementId(u as u32));
+            let (Some(&pl), Some(&pu)) = (self.body.pos.get(l), self.body.pos.get(u)) else { continue };
             let gap = pu[2] - pl[2];
-            if gap >= self.min_gap {
-                continue;
-            }
             // Whatever contact does with the pair (even nothing, both ends fixed), the limits' repair
             // looks at the step's gaps itself.
             self.repair.contact = true;
@@ -796,11 +803,7 @@ impl Tissue {
         // Each material's tear ratio, squared (lengths are compared squared: no root per link).
         let mut tear2 = std::mem::take(&mut self.tear_scratch);
         tear2.clear();
-        tear2.extend(self.body.materials().iter().map(|m| m.tear_ratio.map(|r| r * r)));
-        // The same, infinite for a material that does not tear (the flat scan's form).
-        let mut ratio2 = std::mem::take(&mut self.ratio_scratch);
-        ratio2.clear();
-        ratio2.extend(tear2.iter().map(|r| r.unwrap_or(f32::INFINITY)));
+        tear2.extend(self.body.materials().iter().map(|m| m.tear_ratio.map_or(f32::INFINITY, |r| r * r)));
         let mut hits = std::mem::take(&mut self.tear_hits);
         hits.clear();
         // Each slot class's box widened by the tolerance (a handful of classes).
@@ -821,13 +824,13 @@ impl Tissue {
         let mut out = ScanFound { keep: boxes.is_some().then_some(&mut keep), ..Default::default() };
         let max2 = match (geometry, boxes) {
             (Geometry::Surface(s), None) if s.is_flat() => {
-                let m = self.scan_flat::<false>(&ratio2, &mut hits, &NO_BOXES, &wide, &mut out);
+                let m = self.scan_flat::<false>(&tear2, &mut hits, &NO_BOXES, &wide, &mut out);
                 #[cfg(debug_assertions)]
                 self.check_scan::<false>(&tear2, &hits, flat, &NO_BOXES, &wide, &out, m);
                 m
             }
             (Geometry::Surface(s), Some(b)) if s.is_flat() => {
-                let m = self.scan_flat::<true>(&ratio2, &mut hits, &b, &wide, &mut out);
+                let m = self.scan_flat::<true>(&tear2, &mut hits, &b, &wide, &mut out);
                 #[cfg(debug_assertions)]
                 self.check_scan::<true>(&tear2, &hits, flat, &b, &wide, &out, m);
                 m
@@ -837,7 +840,6 @@ impl Tissue {
         };
         let (outside, drift) = (out.outside, out.drift);
         self.tear_scratch = tear2;
-        self.ratio_scratch = ratio2;
         self.tear_hits = hits;
         self.wide_scratch = wide;
         self.scan_keep = keep;
@@ -865,7 +867,7 @@ impl Tissue {
     #[allow(clippy::too_many_arguments)]
     fn scan_region<const BOXES: bool>(
         &self,
-        tear2: &[Option<f32>],
+        tear2: &[f32],
         hits: &mut Vec<LinkId>,
         world: impl Fn([f32; 3]) -> Vec3,
         boxes: &BoxCheck<'_>,
@@ -921,7 +923,7 @@ impl Tissue {
                 let d2 = world(q).distance_squared(pa);
                 // The force proxy is the layers' stretch: fibres are meant to stretch before they are cut.
                 let layer = matches!(kind[l], LinkKind::Layer(_));
-                let ratio2 = tear2.get(material[l].index()).copied().flatten().unwrap_or(f32::INFINITY);
+                let ratio2 = tear2.get(material[l].index()).copied().unwrap_or(f32::INFINITY);
                 tear_test(d2, rest2, ratio2, layer, &mut max_stretch2, || hits.push(LinkId(raw)));
             }
             if keep && let Some(k) = out.keep.as_deref_mut() {
@@ -937,7 +939,7 @@ impl Tissue {
     #[allow(clippy::too_many_arguments)]
     fn check_scan<const BOXES: bool>(
         &self,
-        tear2: &[Option<f32>],
+        tear2: &[f32],
         hits: &[LinkId],
         world: impl Fn([f32; 3]) -> Vec3,
         boxes: &BoxCheck<'_>,

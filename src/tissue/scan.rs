@@ -6,9 +6,7 @@
 //! four link- or slot-indexed arrays. [`Tissue::scan_region`] is the plain path;
 //! in debug builds every scan compares the two.
 
-use super::{BoxCheck, LinkKind, NEAR, ScanFound, Tissue, limits, settle};
-use std::cmp::Ordering;
-
+use super::{BoxCheck, LinkKind, ScanFound, Tissue, limits, near_bar, settle, tear_divide};
 use crate::chainmail::{Body, INTACT, LinkId, SIDE_B_BIT};
 
 /// Set in [`ScanLink::link`] for a link within a layer (whose stretch the scan reports).
@@ -153,12 +151,7 @@ impl Tissue {
                 let d = [q[0] - p[0], q[2] - p[2], q[1] - p[1]];
                 let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
                 let ratio = ratio2.get(k.material as usize).copied().unwrap_or(f32::INFINITY);
-                let layer = k.link & LAYER != 0;
-                // `tear_test`'s first comparison (a NaN goes on, as there). Its bar is
-                // `ratio.min(max_stretch2)` for a layer's link: neither is ever NaN (the ratio is a
-                // validated material's, the largest stretch never takes a NaN), so a comparison does.
-                let bar = if layer && max_stretch2 < ratio { max_stretch2 } else { ratio };
-                let near = matches!(d2.partial_cmp(&(bar * k.rest2 * NEAR)), Some(Ordering::Greater) | None);
+                let near = near_bar(d2, k.rest2, ratio, k.link & LAYER != 0, max_stretch2);
                 let outside = BOXES && wide.get(k.class as usize).is_some_and(|&w| limits::beyond(p, q, w));
                 if near || outside {
                     let moved_y = BOXES && outside && (moved_e || moved(k.nbr as usize));
@@ -177,18 +170,13 @@ impl Tissue {
     }
 }
 
-/// `tear_test` of a link the scan found near the bar (`d2` past the bar's multiplication test):
-/// the division, the largest stretch and the tear, out of the scan's loop.
+/// The rest of `tear_test` for a link the scan found near its bar, out of the scan's loop.
 #[cold]
 #[inline(never)]
 fn scan_link(k: &ScanLink, d2: f32, ratio2: f32, max_stretch2: &mut f32, hits: &mut Vec<LinkId>) {
-    let stretch2 = d2 / k.rest2;
-    if k.link & LAYER != 0 {
-        *max_stretch2 = max_stretch2.max(stretch2);
-    }
-    if stretch2 > ratio2 {
-        hits.push(LinkId(k.link & !LAYER));
-    }
+    tear_divide(d2, k.rest2, ratio2, k.link & LAYER != 0, max_stretch2, || {
+        hits.push(LinkId(k.link & !LAYER))
+    });
 }
 
 #[cfg(test)]

@@ -380,7 +380,7 @@ impl WebApp {
 fn drive_hand(state: &mut State, session: &mut Session, press: bool) {
     let camera = state.win.camera.camera;
     let pointer = state.win.pointer;
-    // The tissue under the cursor, where the hand reads it (rebuilding the picker costs a frame).
+    // The tissue under the cursor, where the hand reads it (a pull or a push need not refresh the picker).
     let (ray, hit) = if press || state.hand.reads_tissue(&session.view) {
         session.refresh_picker();
         input::pick(&session.picker, &session.snapshot, &camera, &pointer)
