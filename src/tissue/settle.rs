@@ -56,25 +56,15 @@ impl Tissue {
             self.relax_cursor = last.0 + 1;
         }
         let (head, tail) = self.active.split_at(start);
-        let part = tail.iter().chain(head).take(len);
+        // The sweep goes round the region: from `start` to its end, then from its beginning.
+        let part =
+            if len <= tail.len() { [&tail[..len], &[][..]] } else { [tail, &head[..len - tail.len()]] };
         let (body, last_move) = (&mut self.body, &mut self.last_move);
-        let mut report = crate::chainmail::sweeps_within(budget, || {
-            let mut change = 0.0f32;
-            for &e in part.clone() {
-                let i = e.index();
-                let p = body.pos[i];
-                let q = body.relaxed_into_boxes(i);
-                let m = (q[0] - p[0]).abs().max((q[1] - p[1]).abs()).max((q[2] - p[2]).abs());
-                last_move[i] = m;
-                change = change.max(m);
-                // In place (Gauss-Seidel): the element is kept inside its links' boxes around its
-                // neighbours' current positions, so links that hold keep holding. A Jacobi sweep
-                // moves both ends of a link at once, each within the box around the other's old
-                // position, and can leave the link outside its limits.
-                body.pos[i] = q;
-            }
-            change
-        });
+        // In place (Gauss-Seidel): the element is kept inside its links' boxes around its neighbours'
+        // current positions, so links that hold keep holding. A Jacobi sweep moves both ends of a
+        // link at once, each within the box around the other's old position, and can leave the link
+        // outside its limits.
+        let mut report = crate::chainmail::sweeps_within(budget, || body.sweep_region(part, last_move));
         if report.sweeps > 0 {
             body.note_motion();
         }

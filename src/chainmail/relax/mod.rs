@@ -20,6 +20,7 @@ use kernel::{max_change, relaxed_row};
 mod bands;
 mod grid;
 mod kernel;
+mod region;
 
 /// How much relaxation a call may do.
 #[derive(Clone, Copy, Debug, PartialEq)]
