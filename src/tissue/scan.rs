@@ -170,6 +170,27 @@ impl Tissue {
     }
 }
 
+/// [`Tissue::scan_flat`] for pulp's dispatch: the same operations, compiled for the widest vectors
+/// the workspace's level and the machine allow (shorter code; no contraction into fused multiply-adds,
+/// so the same figures to the bit).
+pub(super) struct FlatScan<'a, 'b, const BOXES: bool> {
+    pub(super) tissue: &'a Tissue,
+    pub(super) ratio2: &'a [f32],
+    pub(super) hits: &'a mut Vec<LinkId>,
+    pub(super) boxes: &'a BoxCheck<'b>,
+    pub(super) wide: &'a [[[f32; 3]; 2]],
+    pub(super) out: &'a mut ScanFound<'b>,
+}
+
+impl<const BOXES: bool> pulp::WithSimd for FlatScan<'_, '_, BOXES> {
+    type Output = f32;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> f32 {
+        self.tissue.scan_flat::<BOXES>(self.ratio2, self.hits, self.boxes, self.wide, self.out)
+    }
+}
+
 /// The rest of `tear_test` for a link the scan found near its bar, out of the scan's loop.
 #[cold]
 #[inline(never)]

@@ -59,12 +59,12 @@ impl Tissue {
         // The sweep goes round the region: from `start` to its end, then from its beginning.
         let part =
             if len <= tail.len() { [&tail[..len], &[][..]] } else { [tail, &head[..len - tail.len()]] };
-        let (body, last_move) = (&mut self.body, &mut self.last_move);
+        let (body, last_move, simd) = (&mut self.body, &mut self.last_move, self.ws.simd());
         // In place (Gauss-Seidel): the element is kept inside its links' boxes around its neighbours'
         // current positions, so links that hold keep holding. A Jacobi sweep moves both ends of a
         // link at once, each within the box around the other's old position, and can leave the link
         // outside its limits.
-        let mut report = crate::chainmail::sweeps_within(budget, || body.sweep_region(part, last_move));
+        let mut report = crate::chainmail::sweeps_within(budget, || body.sweep_region(simd, part, last_move));
         if report.sweeps > 0 {
             body.note_motion();
         }

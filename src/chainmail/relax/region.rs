@@ -6,18 +6,26 @@
 //! the plain kernel. Both make the same operations in the same order: the same positions and moves,
 //! bit for bit (tested below).
 
-use super::kernel::{FLUSH, OMEGA};
-use crate::chainmail::body::{Body, FIXED, SlotClass};
+use super::kernel::relaxed_bounded;
+use crate::chainmail::body::{Body, FIXED};
 use crate::chainmail::coords::clamp;
 use crate::chainmail::ids::ElementId;
+use crate::chainmail::simd::SimdLevel;
 
 impl Body {
     /// One sweep over the elements of `part` (the first slice, then the second) in place: returns the
     /// largest coordinate move and writes each element's to `last_move`.
-    pub(crate) fn sweep_region(&mut self, part: [&[ElementId]; 2], last_move: &mut [f32]) -> f32 {
+    /// The fixed-width rows are compiled for the widest vectors `simd` and the machine allow (pulp
+    /// picks at run time): the same operations, shorter code.
+    pub(crate) fn sweep_region(
+        &mut self,
+        simd: SimdLevel,
+        part: [&[ElementId]; 2],
+        last_move: &mut [f32],
+    ) -> f32 {
         match (self.width, self.pairs.width) {
-            (5, 4) => self.sweep_region_rows::<5, 4>(part, last_move),
-            (4, 0) => self.sweep_region_rows::<4, 0>(part, last_move),
+            (5, 4) => simd.arch().dispatch(Sweep::<5, 4> { body: self, part, last_move }),
+            (4, 0) => simd.arch().dispatch(Sweep::<4, 0> { body: self, part, last_move }),
             _ => self.sweep_region_plain(part, last_move),
         }
     }
@@ -40,6 +48,7 @@ impl Body {
     }
 
     /// [`Body::sweep_region_plain`] for link rows `W` wide and pair rows `P` wide.
+    #[inline(always)]
     fn sweep_region_rows<const W: usize, const P: usize>(
         &mut self,
         part: [&[ElementId]; 2],
@@ -54,42 +63,18 @@ impl Body {
         for &e in part.into_iter().flatten() {
             let i = e.index();
             let p = pos[i];
-            let mut q = p;
-            if flags[i] & FIXED == 0 {
+            let q = if flags[i] & FIXED != 0 {
+                p
+            } else {
                 let row = i * W..(i + 1) * W;
                 let (Ok(nb), Ok(cl)) =
                     (<&[u32; W]>::try_from(&slot_nbr[row.clone()]), <&[u32; W]>::try_from(&slot_class[row]))
                 else {
                     continue;
                 };
-                // `relaxed_bounded`.
-                let r = rest[i];
-                let mut acc = [0.0f32; 3];
-                let mut wsum = 0.0f32;
-                let mut lo = [f32::NEG_INFINITY; 3];
-                let mut hi = [f32::INFINITY; 3];
-                for t in 0..W {
-                    let SlotClass { bounds: [blo, bhi], w } = classes[cl[t] as usize];
-                    let j = nb[t] as usize;
-                    let (pj, rj) = (pos[j], rest[j]);
-                    for c in 0..3 {
-                        acc[c] += w * (pj[c] - rj[c]);
-                        let (l, h) = (pj[c] + blo[c], pj[c] + bhi[c]);
-                        lo[c] = if l > lo[c] { l } else { lo[c] };
-                        hi[c] = if h < hi[c] { h } else { hi[c] };
-                    }
-                    wsum += w;
-                }
-                if wsum > 0.0 {
-                    let inv = OMEGA / wsum;
-                    for c in 0..3 {
-                        let target = p[c] + (acc[c] * inv - OMEGA * (p[c] - r[c]));
-                        let floor = if lo[c] < p[c] { lo[c] } else { p[c] };
-                        let ceil = if hi[c] > p[c] { hi[c] } else { p[c] };
-                        let t = clamp(target, floor, ceil);
-                        q[c] = (t + FLUSH) - FLUSH;
-                    }
-                }
+                // `relaxed_bounded` over arrays: the loops over the row unroll.
+                let (mut q, mut lo, mut hi) =
+                    relaxed_bounded(|j| pos[j], p, rest[i], &nb[..], &cl[..], classes, |_, j| rest[j]);
                 // `relaxed_bounded_in`: the normal pairs' bounds on the third coordinate.
                 if P > 0 {
                     let prow = i * P..(i + 1) * P;
@@ -114,7 +99,8 @@ impl Body {
                         q[c] = q[c].clamp(lo[c], hi[c]);
                     }
                 }
-            }
+                q
+            };
             let m = move_of(p, q);
             if let Some(l) = last_move.get_mut(i) {
                 *l = m;
@@ -126,6 +112,22 @@ impl Body {
     }
 }
 
+/// A sweep of fixed-width rows, for pulp's dispatch.
+struct Sweep<'a, const W: usize, const P: usize> {
+    body: &'a mut Body,
+    part: [&'a [ElementId]; 2],
+    last_move: &'a mut [f32],
+}
+
+impl<const W: usize, const P: usize> pulp::WithSimd for Sweep<'_, W, P> {
+    type Output = f32;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> f32 {
+        self.body.sweep_region_rows::<W, P>(self.part, self.last_move)
+    }
+}
+
 /// The largest coordinate move from `p` to `q`.
 #[inline(always)]
 fn move_of(p: [f32; 3], q: [f32; 3]) -> f32 {
@@ -134,6 +136,7 @@ fn move_of(p: [f32; 3], q: [f32; 3]) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    use crate::chainmail::simd::SimdLevel;
     use crate::chainmail::{ElementId, Material, Pass};
     use crate::surface::Surface;
     use crate::tissue::{ConnectiveSpec, LayerSpec, LayeredSpec, Pinning, Tissue, TissueSpec};
@@ -185,8 +188,10 @@ mod tests {
             let part = [tail, &head[..n / 5]];
             let (mut fast, mut plain) = (t.body().clone(), t.body().clone());
             let (mut fast_moves, mut plain_moves) = (vec![0.0f32; n], vec![0.0f32; n]);
-            for sweep in 0..6 {
-                let a = fast.sweep_region(part, &mut fast_moves);
+            for (sweep, level) in
+                [SimdLevel::detected(), SimdLevel::Scalar].into_iter().cycle().take(6).enumerate()
+            {
+                let a = fast.sweep_region(level, part, &mut fast_moves);
                 let b = plain.sweep_region_plain(part, &mut plain_moves);
                 assert_eq!(a.to_bits(), b.to_bits(), "{layers} layers, sweep {sweep}: largest move");
                 assert!(a > 0.0, "{layers} layers, sweep {sweep}: nothing moved");
