@@ -14,8 +14,7 @@ use crate::chainmail::simd::SimdLevel;
 
 impl Body {
     /// One sweep over the elements of `part` (the first slice, then the second) in place: returns the
-    /// largest coordinate move and writes each element's to `last_move`.
-    /// The fixed-width rows are compiled for the widest vectors `simd` and the machine allow (pulp
+    /// largest coordinate move and writes each element's to `last_move`. The fixed-width rows are compiled for the widest vectors `simd` and the machine allow (pulp
     /// picks at run time): the same operations, shorter code.
     pub(crate) fn sweep_region(
         &mut self,
