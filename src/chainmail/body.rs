@@ -1,12 +1,18 @@
 //! A deformable body: a lattice with current positions, pins, materials and broken links.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 use super::coords::{norm, sub};
 use super::error::{ChainMailError, finite};
 use super::ids::{ElementId, LinkId, MaterialId};
 use super::lattice::Lattice;
 use super::material::Material;
+
+/// An empty memo of interned classes: no class has these bits (a NaN weight).
+const NO_MEMO: [([u32; 8], u32); MEMO] = [([u32::MAX; 8], 0); MEMO];
+
+/// How many interned classes [`Body::intern`] remembers.
+const MEMO: usize = 8;
 
 /// Element flag: pinned by the scene (held by surrounding anatomy); never moved.
 pub(crate) const PINNED: u8 = 1;
@@ -57,7 +63,9 @@ pub struct Body {
     /// The distinct slot classes; entry 0 is [`SlotClass::FREE`].
     pub(crate) classes: Vec<SlotClass>,
     /// Where each class sits in `classes`, by its bits.
-    class_index: HashMap<[u32; 8], u32>,
+    class_index: FxHashMap<[u32; 8], u32>,
+    /// The last classes interned, by their bits, the newest first (see [`Body::intern`]).
+    class_memo: [([u32; 8], u32); MEMO],
     /// Which lattice this body was built on: a number no other body's lattice has (clones share it).
     /// A workspace keeps tables of the lattice it last served under this number.
     pub(crate) shape: u64,
@@ -133,7 +141,8 @@ impl Body {
             class_words,
             slot_class: vec![0; slot_nbr.len()],
             classes: vec![SlotClass::FREE],
-            class_index: HashMap::from([(SlotClass::FREE.key(), 0)]),
+            class_index: FxHashMap::from_iter([(SlotClass::FREE.key(), 0)]),
+            class_memo: NO_MEMO,
             slot_nbr,
             pos: lattice.rest.clone(),
             flags: vec![0; n],
@@ -161,6 +170,12 @@ impl Body {
     }
 
     fn update_link_box(&mut self, l: usize) {
+        self.set_link_box(l);
+        self.update_pairs_of_link(l);
+    }
+
+    /// [`Body::update_link_box`] but for the normal pairs through the link.
+    fn set_link_box(&mut self, l: usize) {
         self.touch();
         self.boxes_epoch = self.revision;
         let lat = &self.lattice;
@@ -178,7 +193,6 @@ impl Body {
             let cb = self.intern(SlotClass { bounds: [lo, hi], w });
             self.set_slot_class(sb, cb);
         }
-        self.update_pairs_of_link(l);
     }
 
     /// Sets slot `k`'s class and the change bits of its owner and the owner's successor (the class
@@ -200,6 +214,19 @@ impl Body {
     /// material changes) are dropped by rebuilding the table once it holds more than twice the
     /// classes the slots could need.
     fn intern(&mut self, class: SlotClass) -> u32 {
+        // The last classes interned: a link's two slots, and the next links', usually among them.
+        let key = class.key();
+        if let Some(&(_, i)) = self.class_memo.iter().find(|m| m.0 == key) {
+            return i;
+        }
+        let i = self.intern_new(class);
+        self.class_memo.rotate_right(1);
+        self.class_memo[0] = (key, i);
+        i
+    }
+
+    /// [`Body::intern`] past its memo.
+    fn intern_new(&mut self, class: SlotClass) -> u32 {
         if let Some(&i) = self.class_index.get(&class.key()) {
             return i;
         }
@@ -217,8 +244,9 @@ impl Body {
 
     /// Rebuilds the class table with only the classes in use.
     fn rebuild_classes(&mut self) {
+        self.class_memo = NO_MEMO;
         let old = std::mem::replace(&mut self.classes, vec![SlotClass::FREE]);
-        self.class_index = HashMap::from([(SlotClass::FREE.key(), 0)]);
+        self.class_index = FxHashMap::from_iter([(SlotClass::FREE.key(), 0)]);
         for k in 0..self.slot_class.len() {
             let c = old[self.slot_class[k] as usize];
             let i = match self.class_index.get(&c.key()) {
@@ -392,11 +420,14 @@ impl Body {
             .get_mut(id.index())
             .ok_or(ChainMailError::MaterialOutOfRange { id: id.0, count })?;
         *slot = material;
+        // Every link's box first, then each normal pair through one of them once (a pair's bounds
+        // are those of its paths' boxes, however many of its links changed).
         for l in 0..self.link_material.len() {
             if self.link_material[l] == id {
-                self.update_link_box(l);
+                self.set_link_box(l);
             }
         }
+        self.update_pairs_of_material(id);
         Ok(())
     }
 

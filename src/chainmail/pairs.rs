@@ -16,7 +16,7 @@
 
 use super::body::{Body, INTACT};
 use super::error::ChainMailError;
-use super::ids::{ElementId, LinkId};
+use super::ids::{ElementId, LinkId, MaterialId};
 
 /// A pair as given to [`Body::set_normal_pairs`]: ends `a` and `b` and the two paths of two links
 /// from `a` to `b` (`[a–m, m–b]` each).
@@ -173,6 +173,17 @@ impl Body {
         }
     }
 
+    /// Recomputes every normal pair with a link of material `id` on one of its paths, once.
+    pub(crate) fn update_pairs_of_material(&mut self, id: MaterialId) {
+        for k in 0..self.pairs.list.len() {
+            let through =
+                self.pairs.list[k].paths.iter().flatten().any(|l| self.link_material[l.index()] == id);
+            if through {
+                self.update_pair(k);
+            }
+        }
+    }
+
     fn touch_pairs(&mut self) {
         // Pairs change what relaxation and the chain reaction read: a new revision, as for links.
         self.revision = super::body::fresh_number();
@@ -254,6 +265,41 @@ mod tests {
         }
         body.set_normal_pairs(&pairs).expect("pairs");
         body
+    }
+
+    /// A material edited live leaves every slot's box and weight, every link's box and every normal
+    /// pair's bounds as a body built with the new material from the start has them (the edit sets
+    /// the links' boxes first and each pair once after; the build, link by link).
+    #[test]
+    fn an_edited_material_is_the_material_built_in() {
+        let (n, d) = (9, 0.001f32);
+        let (old, new) = (Material::relative(1.1, 0.9, 0.2), Material::relative(1.4, 0.7, 0.45));
+        let build = |m: Material| {
+            let mut body = sheet_with_pairs(n, d, 0.25);
+            let id = body.add_material(m).expect("material");
+            // The left half of the sheet and the links crossing into it: pairs with paths of both.
+            body.set_material_where(id, |a, b| a[0] + b[0] < 8.0 * d).expect("where");
+            (body, id)
+        };
+        let (mut edited, id) = build(old);
+        edited.set_material(id, new).expect("edit");
+        let (built, _) = build(new);
+        let slot = |b: &Body, k: usize| {
+            let c = b.classes[b.slot_class[k] as usize];
+            (c.bounds.map(|x| x.map(f32::to_bits)), c.w.to_bits())
+        };
+        assert_eq!(edited.slot_class.len(), built.slot_class.len());
+        for k in 0..built.slot_class.len() {
+            assert_eq!(slot(&edited, k), slot(&built, k), "slot {k}");
+        }
+        let bits = |b: &[[f32; 3]; 2]| b.map(|x| x.map(f32::to_bits));
+        for (l, (e, b)) in edited.link_box.iter().zip(&built.link_box).enumerate() {
+            assert_eq!(bits(e), bits(b), "link {l}");
+        }
+        for (k, (e, b)) in edited.pairs.bounds.iter().zip(&built.pairs.bounds).enumerate() {
+            assert_eq!(e.map(f32::to_bits), b.map(f32::to_bits), "pair slot {k}");
+        }
+        assert_ne!(slot(&edited, 0), slot(&sheet_with_pairs(n, d, 0.25), 0), "the edit changed nothing");
     }
 
     #[test]
