@@ -15,9 +15,9 @@ pub const SETTLED: f32 = 1e-7;
 /// budget's sweeps, a larger one fewer (as many whole sweeps as fit), and one larger than this a part
 /// of a sweep, continued from where the last step stopped (the region is in element order, so the
 /// sweep goes round it over the next steps). A step then costs a bounded amount however much of the
-/// sheet a lift disturbs (the sweep runs about 330 instructions an update; the phase took about
-/// 130 ns an update in the careful exercise's early lift at 128 x 96 on a 2.45 GHz AVX2 machine,
-/// 2026-11-25), and the region, kept
+/// sheet a lift disturbs (the sweep runs about 330 instructions an update; in the careful exercise's
+/// early lift on a 2.45 GHz AVX2 machine, 2026-11-25, the phase took about 30 ns an update at
+/// 128 x 96 and 85 ns at 256 x 192, whose region outgrows the caches), and the region, kept
 /// until it converges, goes on relaxing over the next steps: the chain reaction and the limits' repair
 /// after contact (`limits.rs`) put every element within its links' limits, so an element not reached
 /// this step is only less smooth, never out of its limits. Counted in updates, not time, so that runs
