@@ -219,26 +219,26 @@ impl Body {
         if let Some(&(_, i)) = self.class_memo.iter().find(|m| m.0 == key) {
             return i;
         }
-        let i = self.intern_new(class);
+        let i = self.intern_new(class, key);
         self.class_memo.rotate_right(1);
         self.class_memo[0] = (key, i);
         i
     }
 
     /// [`Body::intern`] past its memo.
-    fn intern_new(&mut self, class: SlotClass) -> u32 {
-        if let Some(&i) = self.class_index.get(&class.key()) {
+    fn intern_new(&mut self, class: SlotClass, key: [u32; 8]) -> u32 {
+        if let Some(&i) = self.class_index.get(&key) {
             return i;
         }
         if self.classes.len() > 2 * self.slot_class.len() + 16 {
             self.rebuild_classes();
-            if let Some(&i) = self.class_index.get(&class.key()) {
+            if let Some(&i) = self.class_index.get(&key) {
                 return i;
             }
         }
         let i = self.classes.len() as u32;
         self.classes.push(class);
-        self.class_index.insert(class.key(), i);
+        self.class_index.insert(key, i);
         i
     }
 

@@ -34,7 +34,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::chainmail::{Body, BreakReason, ElementId, LinkId, MaterialId, Pass, RelaxBudget, Workspace};
 use crate::surface::Surface;
-use scan::FlatScan;
 
 /// How lattice coordinates map to the world.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -825,29 +824,13 @@ impl Tissue {
         let mut out = ScanFound { keep: boxes.is_some().then_some(&mut keep), ..Default::default() };
         let max2 = match (geometry, boxes) {
             (Geometry::Surface(s), None) if s.is_flat() => {
-                let scan = FlatScan::<false> {
-                    tissue: self,
-                    ratio2: &tear2,
-                    hits: &mut hits,
-                    boxes: &NO_BOXES,
-                    wide: &wide,
-                    out: &mut out,
-                };
-                let m = self.ws.simd().arch().dispatch(scan);
+                let m = self.scan_flat_simd::<false>(&tear2, &mut hits, &NO_BOXES, &wide, &mut out);
                 #[cfg(debug_assertions)]
                 self.check_scan::<false>(&tear2, &hits, flat, &NO_BOXES, &wide, &out, m);
                 m
             }
             (Geometry::Surface(s), Some(b)) if s.is_flat() => {
-                let scan = FlatScan::<true> {
-                    tissue: self,
-                    ratio2: &tear2,
-                    hits: &mut hits,
-                    boxes: &b,
-                    wide: &wide,
-                    out: &mut out,
-                };
-                let m = self.ws.simd().arch().dispatch(scan);
+                let m = self.scan_flat_simd::<true>(&tear2, &mut hits, &b, &wide, &mut out);
                 #[cfg(debug_assertions)]
                 self.check_scan::<true>(&tear2, &hits, flat, &b, &wide, &out, m);
                 m

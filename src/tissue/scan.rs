@@ -170,19 +170,34 @@ impl Tissue {
     }
 }
 
-/// [`Tissue::scan_flat`] for pulp's dispatch: the same operations, compiled for the widest vectors
-/// the workspace's level and the machine allow (shorter code; no contraction into fused multiply-adds,
-/// so the same figures to the bit).
-pub(super) struct FlatScan<'a, 'b, const BOXES: bool> {
-    pub(super) tissue: &'a Tissue,
-    pub(super) ratio2: &'a [f32],
-    pub(super) hits: &'a mut Vec<LinkId>,
-    pub(super) boxes: &'a BoxCheck<'b>,
-    pub(super) wide: &'a [[[f32; 3]; 2]],
-    pub(super) out: &'a mut ScanFound<'b>,
+impl Tissue {
+    /// [`Tissue::scan_flat`] compiled for the widest vectors the workspace's level and the machine
+    /// allow (pulp's dispatch): the same operations in shorter code, and no contraction into fused
+    /// multiply-adds, so the same figures to the bit.
+    pub(super) fn scan_flat_simd<const BOXES: bool>(
+        &self,
+        ratio2: &[f32],
+        hits: &mut Vec<LinkId>,
+        boxes: &BoxCheck<'_>,
+        wide: &[[[f32; 3]; 2]],
+        out: &mut ScanFound<'_>,
+    ) -> f32 {
+        let scan = FlatScan::<BOXES> { tissue: self, ratio2, hits, boxes, wide, out };
+        self.ws.simd().arch().dispatch(scan)
+    }
 }
 
-impl<const BOXES: bool> pulp::WithSimd for FlatScan<'_, '_, BOXES> {
+/// [`Tissue::scan_flat`]'s arguments, for pulp's dispatch.
+struct FlatScan<'a, 'b, 'c, const BOXES: bool> {
+    tissue: &'a Tissue,
+    ratio2: &'a [f32],
+    hits: &'a mut Vec<LinkId>,
+    boxes: &'a BoxCheck<'b>,
+    wide: &'a [[[f32; 3]; 2]],
+    out: &'a mut ScanFound<'c>,
+}
+
+impl<const BOXES: bool> pulp::WithSimd for FlatScan<'_, '_, '_, BOXES> {
     type Output = f32;
 
     #[inline(always)]
