@@ -69,8 +69,9 @@ pub(crate) struct ForceGauge {
     /// Direction of the blade's last move (unit).
     heading: [f32; 3],
     last_target: Option<[f32; 3]>,
-    /// The elements the jaws hold (scratch, refilled every step).
+    /// The elements the jaws hold (scratch, refilled every step), and a sorted copy of them.
     held: Vec<crate::chainmail::ElementId>,
+    sorted: Vec<crate::chainmail::ElementId>,
     /// The tissue's stiffness at the grasped patch, N/m, and the element it was measured around.
     patch: Option<(crate::chainmail::ElementId, f32)>,
 }
@@ -91,7 +92,7 @@ impl ForceGauge {
             if self.held.is_empty() {
                 self.held.push(e);
             }
-            let f = tissue.force_on(&self.held);
+            let f = tissue.force_on_many(&self.held, &mut self.sorted);
             // Only while the forceps are in hand: a clamp left on the tissue stays where it is.
             let short = if inst.kind == InstrumentKind::Forceps {
                 [0, 1, 2].map(|k| inst.target[k] - inst.tip[k])

@@ -199,13 +199,32 @@ impl Tissue {
     /// feel, or a probe pressing on them. A finite-element tissue reports its model's reaction at the
     /// node it last drove instead.
     pub fn force_on(&self, held: &[ElementId]) -> [f32; 3] {
+        self.force_on_where(held, |n| held.contains(&n))
+    }
+
+    /// [`Tissue::force_on`] for a large set: whether a neighbour is in the set is looked up in
+    /// `sorted`, a sorted copy of `held` (refilled here, so that a caller keeping it allocates
+    /// nothing once it has held as many), not searched for along `held`. Forceps at a fine spacing
+    /// hold hundreds of elements (a 2 mm jaw at 512 x 384): searching took 20 to 30 us a step. The
+    /// same sum in the same order as [`Tissue::force_on`], so the same force to the bit.
+    pub fn force_on_many(&self, held: &[ElementId], sorted: &mut Vec<ElementId>) -> [f32; 3] {
+        sorted.clear();
+        sorted.extend_from_slice(held);
+        sorted.sort_unstable();
+        let sorted = &sorted[..];
+        self.force_on_where(held, |n| sorted.binary_search(&n).is_ok())
+    }
+
+    /// [`Tissue::force_on`] with the set's membership test given.
+    #[inline(always)]
+    fn force_on_where(&self, held: &[ElementId], within: impl Fn(ElementId) -> bool) -> [f32; 3] {
         if let Model::Fem(fem) = &self.model {
             return if held.is_empty() { [0.0; 3] } else { fem.reaction() };
         }
         let mut f = [0.0f32; 3];
         for &e in held {
             for (n, l) in self.body.lattice().neighbours(e) {
-                if held.contains(&n) {
+                if within(n) {
                     continue;
                 }
                 let g = self.link_force_on(l, e, n);
@@ -348,6 +367,26 @@ mod tests {
         for x in &k {
             assert!((x - expected).abs() < 1e-3 * expected, "{k:?} against {expected}");
         }
+    }
+
+    /// The force on a large set with its membership looked up in a sorted copy is the plain search's
+    /// to the bit, on a stretched and sheared sheet and a set in no particular order.
+    #[test]
+    fn a_large_set_feels_the_force_a_search_finds() {
+        let mut t = sheet(33, Material::relative(2.0, 0.5, 1.0));
+        let rest: Vec<[f32; 3]> = t.body().lattice().rest_positions().to_vec();
+        for (i, p) in rest.iter().enumerate() {
+            let shear = 0.05 * p[2] + 0.001 * (i % 7) as f32;
+            let _ = t.body_mut().set_position(ElementId(i as u32), [1.1 * p[0] + shear, p[1], 0.95 * p[2]]);
+        }
+        // A patch of 9 x 9 around the centre, listed from the centre outwards in a scrambled order.
+        let mut held: Vec<ElementId> =
+            (12..21).flat_map(|j| (12..21).map(move |i| ElementId((i + 33 * j) as u32))).collect();
+        held.sort_by_key(|e| (e.0 * 7919) % 101);
+        let mut sorted = Vec::new();
+        let (plain, many) = (t.force_on(&held), t.force_on_many(&held, &mut sorted));
+        assert!(norm(plain) > 0.0, "no force on the patch");
+        assert_eq!(plain.map(f32::to_bits), many.map(f32::to_bits));
     }
 
     #[test]
