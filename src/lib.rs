@@ -19,7 +19,7 @@
 //! | [`surface`] | parametric surfaces X(u, v) and the (u, v, h) mapping | chainmail |
 //! | [`snapshot`] | the shared vocabulary: the snapshot the renderer reads, layer meshes, instrument kind and pose, camera spec | serde only (a leaf) |
 //! | [`fem`] | the linear elastic tetrahedral reference model (condensation, SMVM) and its comparison with ChainMail | std, serde, thiserror, faer, nalgebra, chainmail |
-//! | [`tissue`] | layers, connective fibres, pins, grasp and push, contact, cuts, tears, meshes; its deformation model (ChainMail or FEM) | chainmail, surface, fem, snapshot |
+//! | [`tissue`] | layers, connective fibres, pins, grasp and push, contact, cuts, tears, meshes; its deformation model (ChainMail or FEM) | chainmail, surface, fem, snapshot, rayon (a large region's tear scan on two threads) |
 //! | [`instrument`] | probe, forceps, scalpel: state, pose, picking with parry3d | chainmail, tissue, snapshot |
 //! | [`simulation`] | the world: its clock and step length, its commands, the ordered phases of a step, the snapshot it fills | chainmail, tissue, instrument, snapshot, web-time |
 //! | [`haptics`] | haptic devices (mouse, simulated, Haply Inverse3 behind the `haply` feature), the virtual coupling and its passivity controller | instrument, snapshot, web-time; `haply` and `tokio` with the feature |

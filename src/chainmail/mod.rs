@@ -54,7 +54,7 @@ mod material;
 mod pairs;
 mod reaction;
 mod relax;
-mod schedule;
+pub(crate) mod schedule;
 mod simd;
 mod stencil;
 mod workspace;

@@ -1,9 +1,10 @@
-//! Thread scheduling for the whole-body sweep: two halves of a sweep run at once, one on the calling
-//! thread and one on rayon's pool, with a short spin-wait instead of sleeping. Knows nothing of
-//! bodies: the relaxation's bands (`relax/bands.rs`) call it.
+//! Thread scheduling for the whole-body sweep and the tear scan of a large region: two halves of the
+//! work run at once, one on the calling thread and one on rayon's pool, with a short spin-wait
+//! instead of sleeping. Knows nothing of bodies: the relaxation's bands (`relax/bands.rs`) and the
+//! tissue's tear scan (`tissue/scan.rs`) call it.
 
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use web_time::Instant;
@@ -11,7 +12,8 @@ use web_time::Instant;
 /// How long the calling thread waits for the pool's half by spinning before it blocks.
 const SPIN: Duration = Duration::from_millis(2);
 
-/// Runs `here` on the calling thread and `there` on the thread pool, and returns both results.
+/// Runs `here` on the calling thread and `there` on the thread pool, and returns both results (the
+/// second `None` only if its lock was poisoned, which no code holding it can do).
 ///
 /// `rayon::join` called from outside the pool hands both halves to the pool and puts the caller to
 /// sleep until they are done: on this project's virtual machines waking the sleeping threads costs
@@ -21,26 +23,32 @@ const SPIN: Duration = Duration::from_millis(2);
 /// If no pool thread has started `there` by the time `here` is done (a machine busy with other
 /// work), the caller runs it itself rather than wait for one: either way each half runs once,
 /// so the results do not depend on which thread ran it.
-pub(crate) fn here_and_there<A, B>(here: A, there: B) -> (f32, f32)
+pub(crate) fn here_and_there<A, B, R, S>(here: A, there: B) -> (R, Option<S>)
 where
-    A: FnOnce() -> f32,
-    B: FnOnce() -> f32 + Send,
+    A: FnOnce() -> R,
+    B: FnOnce() -> S + Send,
+    S: Send,
 {
     let task = Mutex::new(Some(there));
     // Whoever takes the task first runs it.
     let take = || task.lock().ok().and_then(|mut t| t.take());
-    let far = AtomicU32::new(0f32.to_bits());
+    let far = Mutex::new(None);
+    let keep = |s: S| {
+        if let Ok(mut f) = far.lock() {
+            *f = Some(s);
+        }
+    };
     let done = AtomicBool::new(false);
     let near = rayon::in_place_scope(|s| {
         s.spawn(|_| {
             if let Some(there) = take() {
-                far.store(there().to_bits(), Ordering::Relaxed);
+                keep(there());
             }
             done.store(true, Ordering::Release);
         });
         let near = here();
         if let Some(there) = take() {
-            far.store(there().to_bits(), Ordering::Relaxed);
+            keep(there());
         } else {
             let start = Instant::now();
             while !done.load(Ordering::Acquire) && start.elapsed() < SPIN {
@@ -51,5 +59,8 @@ where
         }
         near
     });
-    (near, f32::from_bits(far.load(Ordering::Relaxed)))
+    // The task ran once, on one thread or the other, before the scope ended (a panic in it ends the
+    // scope with that panic): its result is there unless the lock was poisoned, which only a panic
+    // while holding it could do.
+    (near, far.into_inner().ok().flatten())
 }

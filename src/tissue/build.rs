@@ -536,6 +536,7 @@ impl Tissue {
         };
         let mut tissue = Tissue {
             scan_table,
+            scan_spare: Default::default(),
             kind_links,
             cut_candidates: Vec::new(),
             drift_max: 0.0,

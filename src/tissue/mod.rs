@@ -244,6 +244,8 @@ pub struct Tissue {
     pub(crate) wide_scratch: Vec<[[f32; 3]; 2]>,
     /// Each element's links from its `a` end, as the tear scan reads them on a flat surface.
     pub(crate) scan_table: scan::ScanTable,
+    /// Scratch of the second half of a tear scan split over two threads (see `scan.rs`).
+    pub(crate) scan_spare: scan::ScanSpare,
     /// World rest length of each link, metres (for stretch and tearing).
     pub(crate) rest_len: Vec<f32>,
     /// The connective fibres in link order, each with where it stands at rest (see
@@ -822,15 +824,20 @@ impl Tissue {
             self.scan_table.refresh(&self.body);
         }
         let mut out = ScanFound { keep: boxes.is_some().then_some(&mut keep), ..Default::default() };
+        let mut spare = std::mem::take(&mut self.scan_spare);
+        const SPLIT: usize = scan::SPLIT_MIN;
         let max2 = match (geometry, boxes) {
             (Geometry::Surface(s), None) if s.is_flat() => {
-                let m = self.scan_flat_simd::<false>(&tear2, &mut hits, &NO_BOXES, &wide, &mut out);
+                let m = self.scan_flat_split::<false>(
+                    &tear2, &mut hits, &NO_BOXES, &wide, &mut out, &mut spare, SPLIT,
+                );
                 #[cfg(debug_assertions)]
                 self.check_scan::<false>(&tear2, &hits, flat, &NO_BOXES, &wide, &out, m);
                 m
             }
             (Geometry::Surface(s), Some(b)) if s.is_flat() => {
-                let m = self.scan_flat_simd::<true>(&tear2, &mut hits, &b, &wide, &mut out);
+                let m =
+                    self.scan_flat_split::<true>(&tear2, &mut hits, &b, &wide, &mut out, &mut spare, SPLIT);
                 #[cfg(debug_assertions)]
                 self.check_scan::<true>(&tear2, &hits, flat, &b, &wide, &out, m);
                 m
@@ -839,6 +846,7 @@ impl Tissue {
             (_, Some(b)) => self.scan_region::<true>(&tear2, &mut hits, general, &b, &wide, &mut out),
         };
         let (outside, drift) = (out.outside, out.drift);
+        self.scan_spare = spare;
         self.tear_scratch = tear2;
         self.tear_hits = hits;
         self.wide_scratch = wide;

@@ -7,7 +7,8 @@
 //! in debug builds every scan compares the two.
 
 use super::{BoxCheck, LinkKind, ScanFound, Tissue, limits, near_bar, settle, tear_divide};
-use crate::chainmail::{Body, INTACT, LinkId, SIDE_B_BIT};
+use crate::chainmail::schedule::here_and_there;
+use crate::chainmail::{Body, ElementId, INTACT, LinkId, SIDE_B_BIT};
 
 /// Set in [`ScanLink::link`] for a link within a layer (whose stretch the scan reports).
 const LAYER: u32 = SIDE_B_BIT;
@@ -101,6 +102,7 @@ impl Tissue {
     #[inline(always)]
     pub(super) fn scan_flat<const BOXES: bool>(
         &self,
+        region: &[ElementId],
         ratio2: &[f32],
         hits: &mut Vec<LinkId>,
         boxes: &BoxCheck<'_>,
@@ -116,7 +118,7 @@ impl Tissue {
         let moving = |i: usize| last_move.get(i).is_some_and(|&m| m > settle::SETTLED);
         let mut max_stretch2 = 0.0f32;
         let mut drift = out.drift;
-        for &id in &self.active {
+        for &id in region {
             let e = id.index();
             let (Some(&t0), Some(&t1), Some(&p)) = (start.get(e), start.get(e + 1), pos.get(e)) else {
                 continue;
@@ -170,19 +172,89 @@ impl Tissue {
     }
 }
 
+/// Regions of fewer elements are scanned on one thread: a second thread costs more to start than it
+/// saves. The scan takes about 16 ns an element (the careful exercise's final lift at 256 x 192 on
+/// the AVX2 machine: 600 us over 38 000), so a region this size takes about 130 us, and its second
+/// half twice what handing it to the pool costs there (tens of microseconds).
+pub(crate) const SPLIT_MIN: usize = 1 << 13;
+
+/// The second half's findings of a tear scan split over two threads, kept between steps so that a
+/// split scan allocates nothing once the region has been as large before.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ScanSpare {
+    hits: Vec<LinkId>,
+    keep: Vec<ElementId>,
+}
+
 impl Tissue {
-    /// [`Tissue::scan_flat`] compiled for the widest vectors the workspace's level and the machine
-    /// allow (pulp's dispatch): the same operations in shorter code, and no contraction into fused
-    /// multiply-adds, so the same figures to the bit.
-    pub(super) fn scan_flat_simd<const BOXES: bool>(
+    /// [`Tissue::scan_flat`] over the whole region: on two threads at once when the region has at
+    /// least `split_min` elements (the step's scan: [`SPLIT_MIN`]; tests split small regions) and
+    /// rayon's pool has a thread to spare, each scanning half of it in the region's order (`spare`
+    /// holds the second half's findings). The halves' findings are joined in the region's order: the same tears in the same order, elements kept and box findings, and the
+    /// same largest stretch and drift to the bit (maxima, in whatever order they are taken; a half
+    /// that starts from a lower largest stretch only sends more links to the division).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn scan_flat_split<const BOXES: bool>(
         &self,
         ratio2: &[f32],
         hits: &mut Vec<LinkId>,
         boxes: &BoxCheck<'_>,
         wide: &[[[f32; 3]; 2]],
         out: &mut ScanFound<'_>,
+        spare: &mut ScanSpare,
+        split_min: usize,
     ) -> f32 {
-        let scan = FlatScan::<BOXES> { tissue: self, ratio2, hits, boxes, wide, out };
+        let region = &self.active[..];
+        if region.len() < split_min.max(2) || rayon::current_num_threads() < 2 {
+            return self.scan_flat_simd::<BOXES>(region, ratio2, hits, boxes, wide, out);
+        }
+        let (first, second) = region.split_at(region.len() / 2);
+        let ScanSpare { hits: far_hits, keep: far_keep } = spare;
+        far_hits.clear();
+        far_keep.clear();
+        let keeps = out.keep.is_some();
+        let start = out.drift;
+        let mut far = ScanFound { outside: false, drift: start, keep: keeps.then_some(&mut *far_keep) };
+        let (near_max, far_max) = here_and_there(
+            || self.scan_flat_simd::<BOXES>(first, ratio2, hits, boxes, wide, out),
+            || self.scan_flat_simd::<BOXES>(second, ratio2, far_hits, boxes, wide, &mut far),
+        );
+        let far_max = match far_max {
+            Some(m) => m,
+            // (Not met: the pool's half lost. Scanned again here.)
+            None => {
+                far_hits.clear();
+                far_keep.clear();
+                far = ScanFound { outside: false, drift: start, keep: keeps.then_some(&mut *far_keep) };
+                self.scan_flat_simd::<BOXES>(second, ratio2, far_hits, boxes, wide, &mut far)
+            }
+        };
+        let (far_outside, far_drift) = (far.outside, far.drift);
+        hits.extend_from_slice(far_hits);
+        if let Some(k) = out.keep.as_deref_mut() {
+            k.extend_from_slice(far_keep);
+        }
+        out.outside |= far_outside;
+        // The scan's own maximum: a NaN drift (never met: positions are finite) leaves it as it was.
+        if far_drift > out.drift {
+            out.drift = far_drift;
+        }
+        near_max.max(far_max)
+    }
+
+    /// [`Tissue::scan_flat`] compiled for the widest vectors the workspace's level and the machine
+    /// allow (pulp's dispatch): the same operations in shorter code, and no contraction into fused
+    /// multiply-adds, so the same figures to the bit.
+    fn scan_flat_simd<const BOXES: bool>(
+        &self,
+        region: &[ElementId],
+        ratio2: &[f32],
+        hits: &mut Vec<LinkId>,
+        boxes: &BoxCheck<'_>,
+        wide: &[[[f32; 3]; 2]],
+        out: &mut ScanFound<'_>,
+    ) -> f32 {
+        let scan = FlatScan::<BOXES> { tissue: self, region, ratio2, hits, boxes, wide, out };
         self.ws.simd().arch().dispatch(scan)
     }
 }
@@ -190,6 +262,7 @@ impl Tissue {
 /// [`Tissue::scan_flat`]'s arguments, for pulp's dispatch.
 struct FlatScan<'a, 'b, 'c, const BOXES: bool> {
     tissue: &'a Tissue,
+    region: &'a [ElementId],
     ratio2: &'a [f32],
     hits: &'a mut Vec<LinkId>,
     boxes: &'a BoxCheck<'b>,
@@ -202,7 +275,7 @@ impl<const BOXES: bool> pulp::WithSimd for FlatScan<'_, '_, '_, BOXES> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> f32 {
-        self.tissue.scan_flat::<BOXES>(self.ratio2, self.hits, self.boxes, self.wide, self.out)
+        self.tissue.scan_flat::<BOXES>(self.region, self.ratio2, self.hits, self.boxes, self.wide, self.out)
     }
 }
 
@@ -218,7 +291,7 @@ fn scan_link(k: &ScanLink, d2: f32, ratio2: f32, max_stretch2: &mut f32, hits: &
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::chainmail::{Material, MaterialId};
+    use crate::chainmail::{BreakReason, Material, MaterialId};
     use crate::surface::Surface;
     use crate::tissue::{ConnectiveSpec, LayerSpec, LayeredSpec, Pinning, TissueSpec};
 
@@ -280,5 +353,64 @@ mod tests {
         assert!(stale(&t) > 0, "the link kept its material");
         t.scan_tears(None);
         assert_eq!(stale(&t), 0, "the scan's table kept the old material");
+    }
+
+    /// What one scan of the region finds (tears in order, kept elements, the box finding, the drift
+    /// and the largest stretch, both as bits), split over two threads from `split_min` elements.
+    fn findings<const BOXES: bool>(
+        t: &Tissue,
+        split_min: usize,
+    ) -> (Vec<LinkId>, Vec<ElementId>, bool, u32, u32) {
+        let ratio2: Vec<f32> =
+            t.body.materials().iter().map(|m| m.tear_ratio.map_or(f32::INFINITY, |r| r * r)).collect();
+        let tol = 1e-4;
+        let wide: Vec<_> = t.body.classes.iter().map(|c| limits::widen(c.bounds, tol)).collect();
+        // Moved this step: only the last few elements (the one moved far among them), so that only
+        // the region's second half finds a link out of its box.
+        let stamps: Vec<u32> = (0..t.body.element_count() as u32).map(|e| u32::from(e >= 225)).collect();
+        let boxes = BoxCheck { tol, stamps: &stamps, stamp: 1 };
+        let (mut hits, mut keep, mut spare) = (Vec::new(), Vec::new(), ScanSpare::default());
+        let mut out = ScanFound { keep: BOXES.then_some(&mut keep), ..Default::default() };
+        let m =
+            t.scan_flat_split::<BOXES>(&ratio2, &mut hits, &boxes, &wide, &mut out, &mut spare, split_min);
+        let (outside, drift) = (out.outside, out.drift.to_bits());
+        (hits, keep, outside, drift, m.to_bits())
+    }
+
+    /// A tear scan split over two threads finds what one thread finds, in the same order and to the
+    /// bit, on a region with tears, links out of their boxes, drift, and elements settled and not.
+    #[test]
+    fn a_scan_split_over_two_threads_finds_what_one_finds() {
+        let mut t = tissue();
+        let n = t.body.element_count() as u32;
+        for e in 0..n {
+            t.activate(e);
+        }
+        // Some elements settled (the region keeps them only beside one that moves), some moved far
+        // enough to tear their links and leave their boxes, spread over both halves of the region.
+        for e in (0..n).filter(|e| e % 40 < 25) {
+            t.last_move[e as usize] = 0.0;
+        }
+        for (k, e) in [7u32, 31, 58, 100, 133, 170, 201, 229].into_iter().enumerate() {
+            let p = t.body.position(ElementId(e)).expect("element");
+            let d = 0.012 + 0.002 * k as f32;
+            t.body_mut().set_position(ElementId(e), [p[0] + d, p[1] - 0.5 * d, p[2] + d]).expect("move");
+        }
+        // The far element's fibre cut, so that its links out of their boxes are all the second half's.
+        let fibre = t.body.lattice().neighbours(ElementId(229)).find(|&(m, _)| m.0 < 120).map(|(_, l)| l);
+        t.body_mut().break_link(fibre.expect("fibre"), BreakReason::Cut).expect("cut");
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("pool");
+        for split_min in [2, 17, 120] {
+            let (one, two) =
+                pool.install(|| (findings::<true>(&t, usize::MAX), findings::<true>(&t, split_min)));
+            let halves = one.0.iter().map(|l| l.0 < t.body.lattice().link_count() as u32 / 2);
+            assert!(halves.clone().any(|a| a) && halves.clone().any(|a| !a), "tears in one half only");
+            assert!(one.2, "no link out of its box");
+            assert!(one.1.len() < n as usize && !one.1.is_empty(), "every element or none kept");
+            assert_eq!(one, two, "split from {split_min}: the scan with boxes differs");
+            let (one, two) =
+                pool.install(|| (findings::<false>(&t, usize::MAX), findings::<false>(&t, split_min)));
+            assert_eq!(one, two, "split from {split_min}: the tear scan differs");
+        }
     }
 }
