@@ -537,6 +537,7 @@ impl Tissue {
         let mut tissue = Tissue {
             scan_table,
             scan_spare: Default::default(),
+            growth: Default::default(),
             kind_links,
             cut_candidates: Vec::new(),
             drift_max: 0.0,
@@ -584,6 +585,7 @@ impl Tissue {
             repair: Default::default(),
         };
         tissue.forces = super::force::LinkFactors::of(&tissue);
+        tissue.growth.fit(tissue.body.lattice());
         tissue.fibre_sites = tissue.rest_fibre_sites();
         tissue
     }

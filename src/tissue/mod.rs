@@ -17,6 +17,7 @@ mod cut;
 mod fem_drive;
 mod force;
 mod grasp;
+mod grow;
 mod limits;
 mod link_grid;
 mod mesh;
@@ -244,6 +245,9 @@ pub struct Tissue {
     pub(crate) wide_scratch: Vec<[[f32; 3]; 2]>,
     /// Each element's links from its `a` end, as the tear scan reads them on a flat surface.
     pub(crate) scan_table: scan::ScanTable,
+    /// The lattice's common patterns of neighbours, for growing the region a word at a time
+    /// (`grow.rs`).
+    pub(crate) growth: grow::Growth,
     /// Scratch of the second half of a tear scan split over two threads (see `scan.rs`).
     pub(crate) scan_spare: scan::ScanSpare,
     /// World rest length of each link, metres (for stretch and tearing).
@@ -645,8 +649,10 @@ impl Tissue {
     /// Relaxes the disturbed region within `budget`. The region is kept for the step's contact and
     /// tear checks, which look only there; [`Tissue::end_step`] forgets it once it has converged.
     pub fn relax(&mut self, budget: RelaxBudget) -> crate::chainmail::RelaxReport {
-        self.take_moved();
-        if self.active.is_empty() || self.is_fem() {
+        // What the step's chain reactions moved joins the region as the relaxation puts it in order
+        // (`settle.rs`), not one element at a time here.
+        if self.is_fem() || (self.active.is_empty() && !self.moved_pending) {
+            self.take_moved();
             self.settled = true;
             return crate::chainmail::RelaxReport { converged: true, ..Default::default() };
         }

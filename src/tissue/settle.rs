@@ -78,20 +78,72 @@ impl Tissue {
 
     /// Puts the disturbed region in element order, so that sweeps (and the contact and tear checks
     /// after them) read memory in order rather than in the order the chain reaction reached it: a
-    /// bit per element, set for the region and read back word by word.
+    /// bit per element, set for the region and read back word by word. The elements the step's
+    /// chain reactions moved and their neighbours join it here, a word at a time (`grow.rs`), as
+    /// [`Tissue::take_moved`] would have put them in one by one before.
     fn order_region(&mut self) {
+        let n = self.body.element_count();
         let bits = &mut self.region_bits;
         bits.clear();
-        bits.resize(self.body.element_count().div_ceil(64), 0);
+        bits.resize(n.div_ceil(64), 0);
+        // The region is mostly in order already (last step's, in order, and what joined since): a
+        // word is gathered while its elements follow one another and written once.
+        let (mut word, mut x) = (usize::MAX, 0u64);
         for e in &self.active {
-            bits[e.index() / 64] |= 1 << (e.index() % 64);
+            let w = e.index() / 64;
+            if w != word {
+                if let Some(b) = bits.get_mut(word) {
+                    *b |= x;
+                }
+                (word, x) = (w, 0);
+            }
+            x |= 1 << (e.index() % 64);
+        }
+        if let Some(b) = bits.get_mut(word) {
+            *b |= x;
+        }
+        if self.moved_pending {
+            self.moved_pending = false;
+            // Every element joining is marked as moving (what `take_moved` marks); only elements
+            // within both per-element arrays join, as there.
+            let last_move = &mut self.last_move[..];
+            let within = last_move.len().min(self.in_active.len());
+            self.growth.take(self.body.lattice(), &mut self.moved_bits, |w, x| {
+                let first = w * 64;
+                if x == u64::MAX && first + 64 <= within {
+                    last_move[first..first + 64].fill(f32::INFINITY);
+                    bits[w] |= x;
+                    return;
+                }
+                let mut y = x;
+                while y != 0 {
+                    let e = first + y.trailing_zeros() as usize;
+                    y &= y - 1;
+                    if e < within {
+                        last_move[e] = f32::INFINITY;
+                        bits[w] |= 1 << (e % 64);
+                    }
+                }
+            });
         }
         self.active.clear();
+        let in_active = &mut self.in_active[..];
         for (w, &word) in bits.iter().enumerate() {
+            let first = w * 64;
+            // A whole word of the region (most of a large one): its 64 elements at once.
+            if word == u64::MAX && first + 64 <= in_active.len() {
+                self.active.extend((first as u32..first as u32 + 64).map(crate::chainmail::ElementId));
+                in_active[first..first + 64].fill(true);
+                continue;
+            }
             let mut x = word;
             while x != 0 {
-                self.active.push(crate::chainmail::ElementId((w * 64) as u32 + x.trailing_zeros()));
+                let e = (w * 64) as u32 + x.trailing_zeros();
                 x &= x - 1;
+                self.active.push(crate::chainmail::ElementId(e));
+                if let Some(a) = in_active.get_mut(e as usize) {
+                    *a = true;
+                }
             }
         }
     }
