@@ -258,7 +258,8 @@ mod tests {
                 prop_assert!(words.windows(2).all(|p| p[0] < p[1]), "words out of order or twice");
                 prop_assert_eq!(got, plain(lat, &moved));
             }
-            prop_assert!(!g.patterns.is_empty(), "a grid with no common pattern");
+            // (A grid of a few elements a row has no pattern a sixteenth of its elements share.)
+            prop_assert!(nu < 8 || nv < 8 || !g.patterns.is_empty(), "a grid with no common pattern");
         }
     }
 }
