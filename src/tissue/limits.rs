@@ -130,6 +130,27 @@ impl Repair {
         }
     }
 
+    /// [`Repair::note`] for every element of `moved` (in its order) at its position in `old`
+    /// (elements `old` has none for are passed over), with the arrays borrowed once: a lift notes
+    /// tens of thousands of elements a step.
+    pub(crate) fn note_all(&mut self, moved: &[u32], old: &[[f32; 3]]) {
+        let stamp = self.stamp;
+        let (stamps, from, suspects) = (&mut self.stamps[..], &mut self.from[..], &mut self.suspects);
+        for &e in moved {
+            let i = e as usize;
+            let Some(&was) = old.get(i) else { continue };
+            if let Some(s) = stamps.get_mut(i)
+                && *s != stamp
+            {
+                *s = stamp;
+                if let Some(f) = from.get_mut(i) {
+                    *f = was;
+                }
+                suspects.push(e);
+            }
+        }
+    }
+
     /// Starts the next step: what the last one moved is forgotten, what its repair left is kept.
     pub(crate) fn next_step(&mut self) {
         self.suspects.clear();

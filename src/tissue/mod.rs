@@ -530,16 +530,19 @@ impl Tissue {
         if self.moved_bits.len() != n.div_ceil(64) {
             self.moved_bits = vec![0; n.div_ceil(64)];
         }
-        for &e in &self.ws.moved {
+        // Two loops with their arrays borrowed once, and whether any element was marked kept in a
+        // local (a lift moves tens of thousands of elements a step; one loop kept its state in memory).
+        let (moved, bits) = (&self.ws.moved[..], &mut self.moved_bits[..]);
+        self.repair.note_all(moved, &self.ws.old);
+        let mut any = false;
+        for &e in moved {
             let e = e as usize;
-            if let Some(&old) = self.ws.old.get(e) {
-                self.repair.note(e as u32, old);
-            }
-            if let Some(w) = self.moved_bits.get_mut(e / 64) {
+            if let Some(w) = bits.get_mut(e / 64) {
                 *w |= 1 << (e % 64);
-                self.moved_pending = true;
+                any = true;
             }
         }
+        self.moved_pending |= any;
     }
 
     /// Puts the elements chain reactions moved since the last call, and their neighbours, into the
