@@ -104,7 +104,8 @@ impl Growth {
 
     /// Takes the elements in `moved` (bits, left clear) and calls `add` with each word of elements
     /// they and their neighbours make, as bits (word index, bits; every word with a bit once, in
-    /// order).
+    /// order). Bits of another length than the lattice's are left as they are (the region's
+    /// ordering grows by them the plain way first).
     pub(crate) fn take(&mut self, lat: &Lattice, moved: &mut [u64], mut add: impl FnMut(usize, u64)) {
         self.fit(lat);
         let words = self.grown.len();

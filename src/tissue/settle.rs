@@ -83,6 +83,11 @@ impl Tissue {
     /// [`Tissue::take_moved`] would have put them in one by one before.
     fn order_region(&mut self) {
         let n = self.body.element_count();
+        // (The moved elements' bits are sized for the body, as the growth's masks are; if they ever
+        // were not, the plain path puts them in.)
+        if self.moved_pending && self.moved_bits.len() != n.div_ceil(64) {
+            self.take_moved();
+        }
         let bits = &mut self.region_bits;
         bits.clear();
         bits.resize(n.div_ceil(64), 0);
