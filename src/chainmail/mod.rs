@@ -36,7 +36,7 @@
 //! | file | owns |
 //! |---|---|
 //! | `ids`, `error`, `material`, `coords` | typed ids, errors, materials, coordinate arithmetic and the one scalar clamp |
-//! | `simd`, `schedule` | the SIMD level and its dispatch; running two halves of a sweep on two threads |
+//! | `simd`, `schedule` | the SIMD level and its dispatch; running two halves of a sweep, or pieces of a scan in turn, on two threads |
 //! | `lattice` | elements, links, rest shape, adjacency (immutable) |
 //! | `body` | positions, pins, materials, broken links, the slot classes both loops read |
 //! | `pairs` | normal pairs: element pairs without a link whose normal offset is bounded (a grid cell's diagonals), so that the slope limit is round |

@@ -1,10 +1,10 @@
 //! Thread scheduling for the whole-body sweep and the tear scan of a large region: two halves of the
-//! work run at once, one on the calling thread and one on rayon's pool, with a short spin-wait
-//! instead of sleeping. Knows nothing of bodies: the relaxation's bands (`relax/bands.rs`) and the
+//! work (or pieces of it, taken in turn) run at once, on the calling thread and on one of rayon's
+//! pool's, with a short spin-wait instead of sleeping. Knows nothing of bodies: the relaxation's bands (`relax/bands.rs`) and the
 //! tissue's tear scan (`tissue/scan.rs`) call it.
 
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
 
 use web_time::Instant;
@@ -63,4 +63,69 @@ where
     // scope with that panic): its result is there unless the lock was poisoned, which only a panic
     // while holding it could do.
     (near, far.into_inner().ok().flatten())
+}
+
+/// Runs `work` on every piece `0..pieces`, each once, on the calling thread and one pool thread at
+/// once: each takes the next piece not yet taken until none is left, so that the two finish
+/// together however unevenly the pieces cost (halves of a tear scan's region can differ by half:
+/// one layer lifted, the other at rest). What each piece does must not depend on which thread ran
+/// it or when (the caller keeps each piece's results apart and joins them in order).
+///
+/// As [`here_and_there`]: one pool thread is woken, the caller spins briefly for the pool's last
+/// piece rather than sleeping, and if no pool thread has started by the time the caller has taken
+/// the last piece, the caller does not wait for one to take none.
+pub(crate) fn in_turns<W>(pieces: usize, work: W)
+where
+    W: Fn(usize) + Sync,
+{
+    let next = AtomicUsize::new(0);
+    let run = || {
+        loop {
+            let k = next.fetch_add(1, Ordering::SeqCst);
+            if k >= pieces {
+                break;
+            }
+            work(k);
+        }
+    };
+    let started = AtomicBool::new(false);
+    let done = AtomicBool::new(false);
+    rayon::in_place_scope(|s| {
+        s.spawn(|_| {
+            started.store(true, Ordering::SeqCst);
+            run();
+            done.store(true, Ordering::SeqCst);
+        });
+        run();
+        // The pool thread, if it has started, may hold a piece (it took it before the caller found
+        // none left: the counter orders both).
+        if started.load(Ordering::SeqCst) {
+            let start = Instant::now();
+            while !done.load(Ordering::SeqCst) && start.elapsed() < SPIN {
+                for _ in 0..64 {
+                    std::hint::spin_loop();
+                }
+            }
+        }
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every piece runs once, whichever thread takes it, with a pool of two threads and of one.
+    #[test]
+    fn every_piece_runs_once() {
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+            let runs: Vec<AtomicUsize> = (0..37).map(|_| AtomicUsize::new(0)).collect();
+            pool.install(|| {
+                in_turns(runs.len(), |k| {
+                    runs[k].fetch_add(1, Ordering::SeqCst);
+                })
+            });
+            assert!(runs.iter().all(|r| r.load(Ordering::SeqCst) == 1), "{threads} threads");
+        }
+    }
 }

@@ -7,7 +7,7 @@
 //! in debug builds every scan compares the two.
 
 use super::{BoxCheck, LinkKind, ScanFound, Tissue, limits, near_bar, settle, tear_divide};
-use crate::chainmail::schedule::here_and_there;
+use crate::chainmail::schedule::in_turns;
 use crate::chainmail::{Body, ElementId, INTACT, LinkId, SIDE_B_BIT};
 
 /// Set in [`ScanLink::link`] for a link within a layer (whose stretch the scan reports).
@@ -178,21 +178,44 @@ impl Tissue {
 /// half twice what handing it to the pool costs there (tens of microseconds).
 pub(crate) const SPLIT_MIN: usize = 1 << 13;
 
-/// The second half's findings of a tear scan split over two threads, kept between steps so that a
-/// split scan allocates nothing once the region has been as large before.
+/// Most pieces a split scan's region is cut into: enough that the two threads finish within a small
+/// piece of each other.
+const PIECES: usize = 32;
+
+/// One piece's findings of a tear scan split over two threads.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct ScanSpare {
+struct Piece {
     hits: Vec<LinkId>,
     keep: Vec<ElementId>,
+    outside: bool,
+    drift: f32,
+    max_stretch2: f32,
+}
+
+/// The pieces' findings of a tear scan split over two threads, kept between steps so that a split
+/// scan allocates nothing once the region has been as large before.
+#[derive(Debug, Default)]
+pub(crate) struct ScanSpare {
+    pieces: Vec<std::sync::Mutex<Piece>>,
+}
+
+impl Clone for ScanSpare {
+    /// Scratch: a clone starts empty.
+    fn clone(&self) -> Self {
+        Self::default()
+    }
 }
 
 impl Tissue {
     /// [`Tissue::scan_flat`] over the whole region: on two threads at once when the region has at
     /// least `split_min` elements (the step's scan: [`SPLIT_MIN`]; tests split small regions) and
-    /// rayon's pool has a thread to spare, each scanning half of it in the region's order (`spare`
-    /// holds the second half's findings). The halves' findings are joined in the region's order: the same tears in the same order, elements kept and box findings, and the
-    /// same largest stretch and drift to the bit (maxima, in whatever order they are taken; a half
-    /// that starts from a lower largest stretch only sends more links to the division).
+    /// rayon's pool has a thread to spare. The region is then cut into pieces of about a quarter of
+    /// `split_min` (at most [`PIECES`]), which the two threads take in turn (`spare` holds each
+    /// piece's findings), so that both finish together however the pieces cost. The pieces' findings
+    /// are joined in the region's order: the same tears in the same order, elements kept and box
+    /// findings, and the same largest stretch and drift to the bit (maxima, in whatever order they
+    /// are taken; a piece that starts from a lower largest stretch only sends more links to the
+    /// division).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn scan_flat_split<const BOXES: bool>(
         &self,
@@ -208,38 +231,42 @@ impl Tissue {
         if region.len() < split_min.max(2) || rayon::current_num_threads() < 2 {
             return self.scan_flat_simd::<BOXES>(region, ratio2, hits, boxes, wide, out);
         }
-        let (first, second) = region.split_at(region.len() / 2);
-        let ScanSpare { hits: far_hits, keep: far_keep } = spare;
-        far_hits.clear();
-        far_keep.clear();
+        let len = (split_min / 4).max(1);
+        let pieces = region.len().div_ceil(len).clamp(2, PIECES);
+        let len = region.len().div_ceil(pieces);
+        if spare.pieces.len() < pieces {
+            spare.pieces.resize_with(pieces, Default::default);
+        }
         let keeps = out.keep.is_some();
         let start = out.drift;
-        let mut far = ScanFound { outside: false, drift: start, keep: keeps.then_some(&mut *far_keep) };
-        let (near_max, far_max) = here_and_there(
-            || self.scan_flat_simd::<BOXES>(first, ratio2, hits, boxes, wide, out),
-            || self.scan_flat_simd::<BOXES>(second, ratio2, far_hits, boxes, wide, &mut far),
-        );
-        let far_max = match far_max {
-            Some(m) => m,
-            // (Not met: the pool's half lost. Scanned again here.)
-            None => {
-                far_hits.clear();
-                far_keep.clear();
-                far = ScanFound { outside: false, drift: start, keep: keeps.then_some(&mut *far_keep) };
-                self.scan_flat_simd::<BOXES>(second, ratio2, far_hits, boxes, wide, &mut far)
+        let slots = &spare.pieces[..pieces];
+        in_turns(pieces, |k| {
+            let part = region.get(k * len..((k + 1) * len).min(region.len())).unwrap_or_default();
+            // Each piece's slot is locked by the one thread that took the piece (never contended).
+            let Ok(mut slot) = slots[k].lock() else { return };
+            let Piece { hits, keep, outside, drift, max_stretch2 } = &mut *slot;
+            hits.clear();
+            keep.clear();
+            let mut found = ScanFound { outside: false, drift: start, keep: keeps.then_some(keep) };
+            *max_stretch2 = self.scan_flat_simd::<BOXES>(part, ratio2, hits, boxes, wide, &mut found);
+            (*outside, *drift) = (found.outside, found.drift);
+        });
+        let mut max_stretch2 = 0.0f32;
+        for slot in slots {
+            // (A piece's lock is poisoned only by a panic in its scan, which the scope passed on.)
+            let Ok(piece) = slot.lock() else { continue };
+            hits.extend_from_slice(&piece.hits);
+            if let Some(k) = out.keep.as_deref_mut() {
+                k.extend_from_slice(&piece.keep);
             }
-        };
-        let (far_outside, far_drift) = (far.outside, far.drift);
-        hits.extend_from_slice(far_hits);
-        if let Some(k) = out.keep.as_deref_mut() {
-            k.extend_from_slice(far_keep);
+            out.outside |= piece.outside;
+            // The scan's own maximum: a NaN drift (never met: positions are finite) leaves it as it was.
+            if piece.drift > out.drift {
+                out.drift = piece.drift;
+            }
+            max_stretch2 = max_stretch2.max(piece.max_stretch2);
         }
-        out.outside |= far_outside;
-        // The scan's own maximum: a NaN drift (never met: positions are finite) leaves it as it was.
-        if far_drift > out.drift {
-            out.drift = far_drift;
-        }
-        near_max.max(far_max)
+        max_stretch2
     }
 
     /// [`Tissue::scan_flat`] compiled for the widest vectors the workspace's level and the machine
