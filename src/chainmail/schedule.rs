@@ -1,7 +1,7 @@
 //! Thread scheduling for the whole-body sweep and the tear scan of a large region: two halves of the
 //! work (or pieces of it, taken in turn) run at once, on the calling thread and on one of rayon's
-//! pool's, with a short spin-wait instead of sleeping. Knows nothing of bodies: the relaxation's bands (`relax/bands.rs`) and the
-//! tissue's tear scan (`tissue/scan.rs`) call it.
+//! pool's, with a short spin-wait instead of sleeping. Knows nothing of bodies: the relaxation's
+//! bands (`relax/bands.rs`) and the tissue's tear scan (`tissue/scan.rs`) call it.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -71,9 +71,10 @@ where
 /// one layer lifted, the other at rest). What each piece does must not depend on which thread ran
 /// it or when (the caller keeps each piece's results apart and joins them in order).
 ///
-/// As [`here_and_there`]: one pool thread is woken, the caller spins briefly for the pool's last
-/// piece rather than sleeping, and if no pool thread has started by the time the caller has taken
-/// the last piece, the caller does not wait for one to take none.
+/// As [`here_and_there`]: one pool thread is woken, and the caller spins briefly for the pool's last
+/// piece rather than sleeping. If no pool thread has started by the time the caller has taken the
+/// last piece, the caller does not spin for one; rayon's scope still waits (blocking) until a pool
+/// thread has run the job, which then finds no piece left, as it waits in [`here_and_there`].
 pub(crate) fn in_turns<W>(pieces: usize, work: W)
 where
     W: Fn(usize) + Sync,

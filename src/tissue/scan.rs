@@ -242,8 +242,9 @@ impl Tissue {
         let slots = &spare.pieces[..pieces];
         in_turns(pieces, |k| {
             let part = region.get(k * len..((k + 1) * len).min(region.len())).unwrap_or_default();
-            // Each piece's slot is locked by the one thread that took the piece (never contended).
-            let Ok(mut slot) = slots[k].lock() else { return };
+            // Each piece's slot is locked by the one thread that took the piece (never contended). A
+            // lock poisoned by an earlier panic still holds scratch, cleared here.
+            let mut slot = slots[k].lock().unwrap_or_else(std::sync::PoisonError::into_inner);
             let Piece { hits, keep, outside, drift, max_stretch2 } = &mut *slot;
             hits.clear();
             keep.clear();
@@ -253,8 +254,8 @@ impl Tissue {
         });
         let mut max_stretch2 = 0.0f32;
         for slot in slots {
-            // (A piece's lock is poisoned only by a panic in its scan, which the scope passed on.)
-            let Ok(piece) = slot.lock() else { continue };
+            // (A panic in a piece's scan has reached the caller through the scope by now.)
+            let piece = slot.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
             hits.extend_from_slice(&piece.hits);
             if let Some(k) = out.keep.as_deref_mut() {
                 k.extend_from_slice(&piece.keep);
