@@ -4,7 +4,7 @@
 //! bands (`relax/bands.rs`) and the tissue's tear scan (`tissue/scan.rs`) call it.
 
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering};
 use std::time::Duration;
 
 use web_time::Instant;
@@ -12,8 +12,7 @@ use web_time::Instant;
 /// How long the calling thread waits for the pool's half by spinning before it blocks.
 const SPIN: Duration = Duration::from_millis(2);
 
-/// Runs `here` on the calling thread and `there` on the thread pool, and returns both results (the
-/// second `None` only if its lock was poisoned, which no code holding it can do).
+/// Runs `here` on the calling thread and `there` on the thread pool, and returns both results.
 ///
 /// `rayon::join` called from outside the pool hands both halves to the pool and puts the caller to
 /// sleep until they are done: on this project's virtual machines waking the sleeping threads costs
@@ -23,46 +22,32 @@ const SPIN: Duration = Duration::from_millis(2);
 /// If no pool thread has started `there` by the time `here` is done (a machine busy with other
 /// work), the caller runs it itself rather than wait for one: either way each half runs once,
 /// so the results do not depend on which thread ran it.
-pub(crate) fn here_and_there<A, B, R, S>(here: A, there: B) -> (R, Option<S>)
+pub(crate) fn here_and_there<A, B>(here: A, there: B) -> (f32, f32)
 where
-    A: FnOnce() -> R,
-    B: FnOnce() -> S + Send,
-    S: Send,
+    A: FnOnce() -> f32,
+    B: FnOnce() -> f32 + Send,
 {
     let task = Mutex::new(Some(there));
     // Whoever takes the task first runs it.
     let take = || task.lock().ok().and_then(|mut t| t.take());
-    let far = Mutex::new(None);
-    let keep = |s: S| {
-        if let Ok(mut f) = far.lock() {
-            *f = Some(s);
-        }
-    };
+    let far = AtomicU32::new(0f32.to_bits());
     let done = AtomicBool::new(false);
     let near = rayon::in_place_scope(|s| {
         s.spawn(|_| {
             if let Some(there) = take() {
-                keep(there());
+                far.store(there().to_bits(), Ordering::Relaxed);
             }
             done.store(true, Ordering::Release);
         });
         let near = here();
         if let Some(there) = take() {
-            keep(there());
+            far.store(there().to_bits(), Ordering::Relaxed);
         } else {
-            let start = Instant::now();
-            while !done.load(Ordering::Acquire) && start.elapsed() < SPIN {
-                for _ in 0..64 {
-                    std::hint::spin_loop();
-                }
-            }
+            spin_until(&done);
         }
         near
     });
-    // The task ran once, on one thread or the other, before the scope ended (a panic in it ends the
-    // scope with that panic): its result is there unless the lock was poisoned, which only a panic
-    // while holding it could do.
-    (near, far.into_inner().ok().flatten())
+    (near, f32::from_bits(far.load(Ordering::Relaxed)))
 }
 
 /// Runs `work` on every piece `0..pieces`, each once, on the calling thread and one pool thread at
@@ -101,14 +86,19 @@ where
         // The pool thread, if it has started, may hold a piece (it took it before the caller found
         // none left: the counter orders both).
         if started.load(Ordering::SeqCst) {
-            let start = Instant::now();
-            while !done.load(Ordering::SeqCst) && start.elapsed() < SPIN {
-                for _ in 0..64 {
-                    std::hint::spin_loop();
-                }
-            }
+            spin_until(&done);
         }
     });
+}
+
+/// Spins until `done` is set or [`SPIN`] has passed (the scope's end then blocks as usual).
+fn spin_until(done: &AtomicBool) {
+    let start = Instant::now();
+    while !done.load(Ordering::Acquire) && start.elapsed() < SPIN {
+        for _ in 0..64 {
+            std::hint::spin_loop();
+        }
+    }
 }
 
 #[cfg(test)]

@@ -119,15 +119,7 @@ impl Repair {
     /// Notes that element `e`, at `was` before, is about to move or has moved this step.
     #[inline]
     pub(crate) fn note(&mut self, e: u32, was: [f32; 3]) {
-        if let Some(s) = self.stamps.get_mut(e as usize)
-            && *s != self.stamp
-        {
-            *s = self.stamp;
-            if let Some(f) = self.from.get_mut(e as usize) {
-                *f = was;
-            }
-            self.suspects.push(e);
-        }
+        note_in((&mut self.stamps, &mut self.from, &mut self.suspects), self.stamp, e, was);
     }
 
     /// [`Repair::note`] for every element of `moved` (in its order) at its position in `old`
@@ -137,16 +129,8 @@ impl Repair {
         let stamp = self.stamp;
         let (stamps, from, suspects) = (&mut self.stamps[..], &mut self.from[..], &mut self.suspects);
         for &e in moved {
-            let i = e as usize;
-            let Some(&was) = old.get(i) else { continue };
-            if let Some(s) = stamps.get_mut(i)
-                && *s != stamp
-            {
-                *s = stamp;
-                if let Some(f) = from.get_mut(i) {
-                    *f = was;
-                }
-                suspects.push(e);
+            if let Some(&was) = old.get(e as usize) {
+                note_in((&mut *stamps, &mut *from, &mut *suspects), stamp, e, was);
             }
         }
     }
@@ -465,6 +449,26 @@ pub(crate) fn beyond(px: [f32; 3], py: [f32; 3], [lo, hi]: [[f32; 3]; 2]) -> boo
         out |= (d > hi[k]) | (d < lo[k]);
     }
     out
+}
+
+/// [`Repair::note`] on the repair's arrays borrowed apart (so that [`Repair::note_all`] borrows them
+/// once for a whole reaction's moves).
+#[inline(always)]
+fn note_in(
+    (stamps, from, suspects): (&mut [u32], &mut [[f32; 3]], &mut Vec<u32>),
+    stamp: u32,
+    e: u32,
+    was: [f32; 3],
+) {
+    if let Some(s) = stamps.get_mut(e as usize)
+        && *s != stamp
+    {
+        *s = stamp;
+        if let Some(f) = from.get_mut(e as usize) {
+            *f = was;
+        }
+        suspects.push(e);
+    }
 }
 
 /// The lower and upper element of the layer pair element `i` belongs to (`sheet` elements apart).

@@ -248,7 +248,7 @@ pub struct Tissue {
     /// The lattice's common patterns of neighbours, for growing the region a word at a time
     /// (`grow.rs`).
     pub(crate) growth: grow::Growth,
-    /// Scratch of the second half of a tear scan split over two threads (see `scan.rs`).
+    /// Scratch of the pieces of a tear scan split over two threads (see `scan.rs`).
     pub(crate) scan_spare: scan::ScanSpare,
     /// World rest length of each link, metres (for stretch and tearing).
     pub(crate) rest_len: Vec<f32>,

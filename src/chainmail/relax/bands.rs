@@ -110,12 +110,6 @@ fn sweep_range<const W: usize>(band: Band<'_, W>, depth: u32, top: bool) -> f32 
     };
     let (left, right) = (|| sweep_range(left, depth - 1, false), || sweep_range(right, depth - 1, false));
     // Inside the pool a plain `join`; from outside it, the calling thread takes a band itself.
-    // (A lost half counts as moving without bound: the sweep is then not converged.)
-    let (a, b) = if top {
-        here_and_there(right, left)
-    } else {
-        let (l, r) = rayon::join(left, right);
-        (r, Some(l))
-    };
-    a.max(b.unwrap_or(f32::INFINITY))
+    let (a, b) = if top { here_and_there(right, left) } else { rayon::join(left, right) };
+    a.max(b)
 }
