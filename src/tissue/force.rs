@@ -20,8 +20,11 @@
 //!
 //! The force on a set of elements is the sum of their links' forces (links between two elements of the
 //! set cancel), read only from those elements: nothing here walks the body. Cutting a link costs its
-//! material's toughness times the area the blade cuts through (`t·w` in a layer, `L·√A` for a fibre,
-//! `A` in a volume).
+//! material's toughness times the area the blade cuts through: `t·w` in a layer (a stroke cuts the
+//! links it crosses), `A` in a volume, and for a fibre `L·s²/b`, its length times its cell's area
+//! over the blade's width `b` (at least the spacing `s`). A stroke severs every fibre within half the
+//! blade's width of it, `b·ρ/s²` of them per metre at a fibre density `ρ`, so it cuts `L·ρ` square
+//! metres per metre of its length, the same at every spacing.
 //!
 //! Must not import wgpu, winit or egui.
 
@@ -39,8 +42,9 @@ pub(crate) struct LinkFactors {
     /// Per link: `w / L` (layers on a surface) or `A / L` (fibres, volumes), in 1/1 or metres.
     factor: Vec<f32>,
     /// Per link: the cross-section a blade cuts through, as a factor of the thickness for layers on a
-    /// surface (`w`) or in square metres otherwise.
-    cut: Vec<f32>,
+    /// surface (`w`), in square metres in a volume, and for a fibre its length times its cell's area
+    /// (`L·s²`, cubic metres, divided by the blade's width when cut); then the fibre's cell side `s`.
+    cut: Vec<[f32; 2]>,
 }
 
 /// How a link carries load.
@@ -74,7 +78,7 @@ impl LinkFactors {
         let fibres = tissue.link_kind.iter().filter(|k| **k == LinkKind::Connective).count();
         let density = if tissue.sheet > 0 && fibres > 0 { fibres as f32 / tissue.sheet as f32 } else { 1.0 };
         let mut factor = vec![0.0; links];
-        let mut cut = vec![0.0; links];
+        let mut cut = vec![[0.0; 2]; links];
         for (l, (f, c)) in factor.iter_mut().zip(cut.iter_mut()).enumerate() {
             let id = LinkId(l as u32);
             let Some([a, b]) = lattice.link_ends(id) else { continue };
@@ -104,20 +108,20 @@ impl LinkFactors {
                 Spring::Membrane => {
                     let w = perp / 4.0;
                     *f = w / len;
-                    *c = w;
+                    *c = [w, 0.0];
                 }
                 Spring::Fibre => {
                     let side = perp / 8.0;
                     let area = side * side / density;
                     *f = area / len;
-                    *c = len * area.sqrt();
+                    *c = [len * side * side, side];
                 }
                 Spring::Solid => {
                     // The mean perpendicular link, on the faces too: relaxation weighs every link
                     // alike, and the springs must be those it balances.
                     let side = perp / count.max(1) as f32;
                     *f = side * side / len;
-                    *c = side * side;
+                    *c = [side * side, 0.0];
                 }
             }
         }
@@ -270,15 +274,20 @@ impl Tissue {
         }
     }
 
-    /// Energy needed to cut a link, joules: its material's toughness times the area the blade cuts.
+    /// Energy needed to cut a link, joules: its material's toughness times the area the blade cuts
+    /// (see the module's comment).
     pub fn cut_energy(&self, l: LinkId) -> f32 {
-        let (Some(&c), Some(&kind)) = (self.forces.cut.get(l.index()), self.link_kind.get(l.index())) else {
+        let (Some(&[c, side]), Some(&kind)) = (self.forces.cut.get(l.index()), self.link_kind.get(l.index()))
+        else {
             return 0.0;
         };
         let Some(m) = self.body.link_material(l).and_then(|m| self.body.material(m)) else { return 0.0 };
         match spring(self, kind) {
             Spring::Membrane => m.toughness * m.thickness * c,
-            Spring::Fibre | Spring::Solid => m.toughness * c,
+            // The fibre's share of the band the blade sweeps: a blade narrower than the fibres' spacing
+            // cuts a row of them at most.
+            Spring::Fibre => m.toughness * c / (2.0 * self.blade_half_width).max(side).max(f32::MIN_POSITIVE),
+            Spring::Solid => m.toughness * c,
         }
     }
 
