@@ -284,8 +284,8 @@ impl Tissue {
         let Some(m) = self.body.link_material(l).and_then(|m| self.body.material(m)) else { return 0.0 };
         match spring(self, kind) {
             Spring::Membrane => m.toughness * m.thickness * c,
-            // The fibre's share of the band the blade sweeps: a blade narrower than the fibres' spacing
-            // cuts a row of them at most.
+            // The fibre's share of the band the blade sweeps; under a blade narrower than the fibres'
+            // spacing each fibre stands for its cell's side of the stroke, as one row of them would.
             Spring::Fibre => m.toughness * c / (2.0 * self.blade_half_width).max(side).max(f32::MIN_POSITIVE),
             Spring::Solid => m.toughness * c,
         }
