@@ -69,6 +69,13 @@ fn alike(what: &str, figures: &[f32], tolerance: f32) {
     assert!(lo > 0.0 && hi <= (1.0 + tolerance) * lo, "{what} {figures:?} differ by more than {tolerance}");
 }
 
+/// Asserts that the runs' scores lie within `points` of each other.
+fn scores_within(runs: &[Played], points: f32) {
+    let scores: Vec<f32> = runs.iter().map(|r| r.assessment.score).collect();
+    let (lo, hi) = scores.iter().fold((f32::MAX, f32::MIN), |(l, h), &s| (l.min(s), h.max(s)));
+    assert!(hi - lo <= points, "scores {scores:?} differ by more than {points} points");
+}
+
 #[test]
 fn careful_is_the_same_exercise_at_every_resolution() {
     let runs: Vec<Played> = RESOLUTIONS.iter().map(|&r| play("meninges_careful.ron", r)).collect();
@@ -112,9 +119,7 @@ fn careful_is_the_same_exercise_at_every_resolution() {
     eprintln!("scalpel: peak force {peaks:?} N, mean {means:?} N");
     alike("the scalpel's forces", &peaks, 0.30);
     alike("the scalpel's forces", &means, 0.15);
-    let scores: Vec<f32> = runs.iter().map(|r| r.assessment.score).collect();
-    let (lo, hi) = scores.iter().fold((f32::MAX, f32::MIN), |(l, h), &s| (l.min(s), h.max(s)));
-    assert!(hi - lo <= 10.0, "scores {scores:?} differ by more than 10 points");
+    scores_within(&runs, 10.0);
     for pair in runs.windows(2) {
         let lift = pair[1].midline.iter().fold(0.0f32, |m, &h| m.max(h));
         let worst =
@@ -134,4 +139,36 @@ fn careless_fails_at_every_resolution() {
         let run = play("meninges_careless.ron", r);
         assert!(run.assessment.score < 30.0, "{r:?}: careless scores {}", run.assessment.score);
     }
+}
+
+/// The same slip costs the same points at every resolution: damage is scored per millimetre of layer
+/// and per square millimetre of fibres, not per link (until 2026-11-25 it was per link, and this
+/// script lost 17 points at 64 × 48 but 136 (so scored 0) at 256 × 192).
+#[test]
+fn slips_cost_the_same_at_every_resolution() {
+    let runs: Vec<Played> = RESOLUTIONS.iter().map(|&r| play("meninges_slips.ron", r)).collect();
+    for (run, [nu, nv]) in runs.iter().zip(RESOLUTIONS) {
+        let a = &run.assessment;
+        eprintln!(
+            "{nu}x{nv}: score {:.1}, layer cut {} links, {:.2} mm; fibres outside {} links, {:.1} mm²",
+            a.score,
+            a.layer_links_cut,
+            a.layer_cut * 1e3,
+            a.connective_cut_outside,
+            a.connective_cut_outside_m2 * 1e6
+        );
+        assert_eq!(run.torn, 0, "{nu}x{nv}: links torn");
+        assert!(a.passed, "{nu}x{nv}: two small slips fail the session");
+    }
+    // The links cut grow with the resolution (measured: 4, 8, 16 in the dura; 9, 25, 104 fibres) ...
+    let layer: Vec<u64> = runs.iter().map(|r| r.assessment.layer_links_cut).collect();
+    assert!(layer[2] >= 3 * layer[0], "layer links cut {layer:?}: the slip is not resolved finer");
+    // ... but what they stand for does not (measured: 5.08, 5.04, 5.02 mm of dura; 30, 20, 20 mm² of
+    // fibres, the coarsest mesh's fibres each standing for a whole cell of the 1 mm blade's stroke).
+    let mm: Vec<f32> = runs.iter().map(|r| r.assessment.layer_cut * 1e3).collect();
+    alike("the dura cut (mm)", &mm, 0.10);
+    assert!((mm[0] - 5.0).abs() < 0.5, "a 5 mm slip measured {} mm", mm[0]);
+    let mm2: Vec<f32> = runs.iter().map(|r| r.assessment.connective_cut_outside_m2 * 1e6).collect();
+    alike("the fibres cut outside (mm²)", &mm2, 0.60);
+    scores_within(&runs, 5.0);
 }

@@ -45,6 +45,8 @@ pub(crate) struct LinkFactors {
     /// surface (`w`), in square metres in a volume, and for a fibre its length times its cell's area
     /// (`L·s²`, cubic metres, divided by the blade's width when cut); then the fibre's cell side `s`.
     cut: Vec<[f32; 2]>,
+    /// Per link: how much tissue it stands for ([`Tissue::link_extent`]).
+    extent: Vec<f32>,
 }
 
 /// How a link carries load.
@@ -79,7 +81,8 @@ impl LinkFactors {
         let density = if tissue.sheet > 0 && fibres > 0 { fibres as f32 / tissue.sheet as f32 } else { 1.0 };
         let mut factor = vec![0.0; links];
         let mut cut = vec![[0.0; 2]; links];
-        for (l, (f, c)) in factor.iter_mut().zip(cut.iter_mut()).enumerate() {
+        let mut extent = vec![0.0; links];
+        for (l, ((f, c), x)) in factor.iter_mut().zip(cut.iter_mut()).zip(extent.iter_mut()).enumerate() {
             let id = LinkId(l as u32);
             let Some([a, b]) = lattice.link_ends(id) else { continue };
             let kind = tissue.link_kind[l];
@@ -109,12 +112,14 @@ impl LinkFactors {
                     let w = perp / 4.0;
                     *f = w / len;
                     *c = [w, 0.0];
+                    *x = w;
                 }
                 Spring::Fibre => {
                     let side = perp / 8.0;
                     let area = side * side / density;
                     *f = area / len;
                     *c = [len * side * side, side];
+                    *x = area;
                 }
                 Spring::Solid => {
                     // The mean perpendicular link, on the faces too: relaxation weighs every link
@@ -122,10 +127,11 @@ impl LinkFactors {
                     let side = perp / count.max(1) as f32;
                     *f = side * side / len;
                     *c = [side * side, 0.0];
+                    *x = side * side;
                 }
             }
         }
-        Self { factor, cut }
+        Self { factor, cut, extent }
     }
 }
 
@@ -289,6 +295,15 @@ impl Tissue {
             Spring::Fibre => m.toughness * c / (2.0 * self.blade_half_width).max(side).max(f32::MIN_POSITIVE),
             Spring::Solid => m.toughness * c,
         }
+    }
+
+    /// How much tissue a link stands for, the same at every resolution when summed over the links a
+    /// cut or tear breaks: for a layer on a surface, the length of a line across the layer that
+    /// breaks it (its tributary width, metres); for a connective fibre, the area of the layers'
+    /// interface it holds (its cell's area over the fibres' density, square metres); for a solid's
+    /// link, its tributary cross-section (square metres). Zero for an unknown link.
+    pub fn link_extent(&self, l: LinkId) -> f32 {
+        self.forces.extent.get(l.index()).copied().unwrap_or(0.0)
     }
 
     /// Energy spent cutting since the last call, joules (taken).

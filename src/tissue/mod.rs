@@ -201,6 +201,13 @@ pub struct Damage {
     pub connective_links_cut: u64,
     /// Links torn by over-stretching (either kind).
     pub links_torn: u64,
+    /// How much of the layers tore ([`Tissue::link_extent`] summed): metres of tear line on a
+    /// surface, square metres in a volume.
+    #[serde(default)]
+    pub layer_torn: f32,
+    /// Area of connective tissue torn, square metres.
+    #[serde(default)]
+    pub connective_torn_m2: f32,
 }
 
 /// What moves the tissue when an instrument displaces an element.
@@ -1004,7 +1011,14 @@ impl Tissue {
             self.cut_energy += self.cut_energy(l);
         }
         match (reason, kind) {
-            (BreakReason::Tear, _) => self.damage.links_torn += 1,
+            (BreakReason::Tear, _) => {
+                self.damage.links_torn += 1;
+                let extent = self.link_extent(l);
+                match kind {
+                    LinkKind::Connective => self.damage.connective_torn_m2 += extent,
+                    LinkKind::Layer(_) => self.damage.layer_torn += extent,
+                }
+            }
             (BreakReason::Cut, LinkKind::Connective) => self.damage.connective_links_cut += 1,
             (BreakReason::Cut, LinkKind::Layer(_)) => self.damage.layer_links_cut += 1,
         }

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::chainmail::ElementId;
 use crate::simulation::{Forces, InstrumentKind, World};
-use crate::tissue::Tissue;
+use crate::tissue::{LinkKind, Tissue};
 
 /// Force figures of one instrument (or of whichever was in hand), newtons and seconds.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
@@ -48,8 +48,14 @@ pub struct ForceAssessment {
     pub total: ForceStats,
     /// The goal's limit, newtons.
     pub limit_n: f32,
-    /// Largest tension in a link of a forbidden region, newtons.
+    /// Largest tension in a link of a forbidden region, newtons. One link's share, so it falls as the
+    /// resolution rises; [`ForceAssessment::forbidden_peak_n_per_m`] does not.
     pub forbidden_peak_n: f32,
+    /// Largest tension per unit width across a layer in a forbidden region: a layer link's tension
+    /// over its tributary width ([`Tissue::link_extent`]), newtons per metre on a surface (pascals in
+    /// a volume).
+    #[serde(default)]
+    pub forbidden_peak_n_per_m: f32,
     /// Per instrument: forceps, scalpel, probe.
     pub instruments: Vec<InstrumentForce>,
 }
@@ -114,7 +120,8 @@ pub(crate) struct ForceMeter {
     per: [Accumulator; 3],
     /// Per element: in a forbidden region.
     forbidden: Vec<bool>,
-    forbidden_peak: f32,
+    /// Largest link tension, then largest tension over width of a layer link.
+    forbidden_peak: [f32; 2],
 }
 
 impl ForceMeter {
@@ -126,7 +133,7 @@ impl ForceMeter {
             total: Accumulator::default(),
             per: [Accumulator::default(); 3],
             forbidden,
-            forbidden_peak: 0.0,
+            forbidden_peak: [0.0; 2],
         }
     }
 
@@ -142,24 +149,31 @@ impl ForceMeter {
             f = forces.forceps;
         }
         self.total.add(f, self.limit, self.dt);
-        self.forbidden_peak = self.forbidden_peak.max(self.forbidden_tension(world.tissue()));
+        let [link, width] = self.forbidden_tension(world.tissue());
+        self.forbidden_peak = [self.forbidden_peak[0].max(link), self.forbidden_peak[1].max(width)];
     }
 
     /// The largest tension in a forbidden link touching the disturbed region (links elsewhere have not
     /// moved since they were last looked at).
-    fn forbidden_tension(&self, tissue: &Tissue) -> f32 {
-        let mut peak = 0.0f32;
+    /// Returns the largest tension, then the largest tension over width of a layer link.
+    fn forbidden_tension(&self, tissue: &Tissue) -> [f32; 2] {
+        let (mut peak, mut per_width) = (0.0f32, 0.0f32);
         for &e in tissue.active_elements() {
             if !self.forbidden.get(e.index()).copied().unwrap_or(false) {
                 continue;
             }
             for (n, l) in tissue.body().lattice().neighbours(e) {
                 if self.forbidden.get(n.index()).copied().unwrap_or(false) {
-                    peak = peak.max(tissue.link_tension(l));
+                    let t = tissue.link_tension(l);
+                    peak = peak.max(t);
+                    let width = tissue.link_extent(l);
+                    if tissue.link_kind(l) != Some(LinkKind::Connective) && width > 0.0 {
+                        per_width = per_width.max(t / width);
+                    }
                 }
             }
         }
-        peak
+        [peak, per_width]
     }
 
     /// The force on what the hand feels in the last step, newtons (for the history).
@@ -172,7 +186,8 @@ impl ForceMeter {
         ForceAssessment {
             total: self.total.stats(self.dt),
             limit_n: self.limit,
-            forbidden_peak_n: self.forbidden_peak,
+            forbidden_peak_n: self.forbidden_peak[0],
+            forbidden_peak_n_per_m: self.forbidden_peak[1],
             instruments: KINDS
                 .iter()
                 .zip(&self.per)

@@ -55,14 +55,39 @@ pub struct Assessment {
     pub target_links_cut: u32,
     /// Mean separation of the layers over the target beyond their rest gap, metres.
     pub separation_m: f32,
-    /// In-layer links cut away from the planned incision: collateral damage.
+    /// In-layer links cut away from the planned incision: collateral damage. A count of links, so it
+    /// grows with the resolution; the score uses [`Assessment::layer_cut`].
     pub layer_links_cut: u64,
-    /// Connective links cut outside the target: collateral damage.
+    /// How much of the layers was cut away from the planned incision: metres of cut line on a
+    /// surface (square metres in a volume), the same for the same slip at every resolution.
+    #[serde(default)]
+    pub layer_cut: f32,
+    /// Connective links cut outside the target: collateral damage (a count; the score uses
+    /// [`Assessment::connective_cut_outside_m2`]).
     pub connective_cut_outside: u32,
-    /// Links broken (cut or torn) inside a forbidden region.
+    /// Area of connective tissue cut outside the target, square metres.
+    #[serde(default)]
+    pub connective_cut_outside_m2: f32,
+    /// Links broken (cut or torn) inside a forbidden region (a count: any fails the session).
     pub forbidden_links_broken: u32,
-    /// Links torn by over-stretching.
+    /// How much of the layers inside a forbidden region was broken: metres of cut or tear line on a
+    /// surface (square metres in a volume).
+    #[serde(default)]
+    pub forbidden_layer: f32,
+    /// Area of connective tissue broken inside a forbidden region, square metres.
+    #[serde(default)]
+    pub forbidden_connective_m2: f32,
+    /// Links torn by over-stretching (a count).
     pub links_torn: u64,
+    /// How much of the layers tore: metres of tear line on a surface (square metres in a volume).
+    #[serde(default)]
+    pub layer_torn: f32,
+    /// Area of connective tissue torn, square metres.
+    #[serde(default)]
+    pub connective_torn_m2: f32,
+    /// Whether the layers' amounts above are areas (a volume) rather than lengths (a surface).
+    #[serde(default)]
+    pub layers_are_areas: bool,
     /// Highest stretch seen since the clock started (the force proxy).
     pub peak_stretch: f32,
     /// Time spent with the stretch above the limit, seconds.
@@ -83,6 +108,16 @@ pub struct Assessment {
     pub breakdown: Vec<ScoreItem>,
     /// Forces on the instruments and on the forbidden region.
     pub force: ForceAssessment,
+}
+
+impl Assessment {
+    /// How much tissue an amount is, in the trainee's words: "2.5 mm of layer and 3.0 mm² of
+    /// fibres" for a layer's amount in metres (square metres in a volume) and a fibres' in square
+    /// metres.
+    pub fn amount(&self, layer: f32, fibre_m2: f32) -> String {
+        let unit = if self.layers_are_areas { 1e6 } else { 1e3 };
+        amount_text(layer * unit, fibre_m2 * 1e6, self.layers_are_areas)
+    }
 }
 
 /// A point of the session's history, for the report's plot.
@@ -113,6 +148,45 @@ const INCISION_REACH: f32 = 1.0;
 const INCISION_SPACING_M: f32 = 0.00125;
 /// The planned incision is checked at points this many spacings apart.
 const INCISION_STEP: f32 = 0.5;
+
+/// What damage costs, per millimetre of a layer cut or torn (per square millimetre in a volume) and
+/// per square millimetre of connective tissue: physical amounts, so the same slip costs the same at
+/// every resolution. Set so that the default exercise at 64 × 48 (a layer link 1.27 mm wide, a fibre
+/// for 3.2 mm² of interface) scores as it did when each link cost points: 2 a layer link cut, 1 a
+/// fibre cut outside the target, 5 a link broken in a forbidden region, 2 a link torn.
+#[derive(Clone, Copy, Debug)]
+struct Rates {
+    /// A layer cut away from the planned incision.
+    layer_cut: f32,
+    /// Connective tissue cut outside the target.
+    fibre_cut: f32,
+    /// A layer, then connective tissue, broken in a forbidden region.
+    forbidden: [f32; 2],
+    /// A layer, then connective tissue, torn.
+    torn: [f32; 2],
+}
+
+const RATES: Rates = Rates { layer_cut: 1.6, fibre_cut: 0.3, forbidden: [4.0, 1.5], torn: [1.6, 0.6] };
+
+/// A link and how much tissue it stands for, in millimetres (a layer's on a surface) or square
+/// millimetres.
+type Weighted = (LinkId, f32);
+
+/// The sum of the weights of the links in `links` for which `broken` holds.
+fn broken_extent(links: &[Weighted], broken: impl Fn(LinkId) -> bool) -> f32 {
+    links.iter().filter(|(l, _)| broken(*l)).fold(0.0, |sum, (_, w)| sum + w)
+}
+
+/// "2.5 mm of layer and 3.0 mm² of fibres" for a layer's amount in millimetres (square millimetres
+/// when `areas`) and a fibres' in square millimetres, leaving out a part that is nothing.
+fn amount_text(layer: f32, fibre: f32, areas: bool) -> String {
+    let lu = if areas { "mm²" } else { "mm" };
+    match (layer > 0.0, fibre > 0.0) {
+        (true, true) => format!("{layer:.1} {lu} of layer and {fibre:.1} mm² of fibres"),
+        (false, true) => format!("{fibre:.1} mm² of fibres"),
+        _ => format!("{layer:.1} {lu} of layer"),
+    }
+}
 
 /// The linear map from lattice coordinates to surface fractions, and back.
 #[derive(Clone, Copy, Debug)]
@@ -162,12 +236,15 @@ pub struct Assessor {
     target: Vec<LinkId>,
     /// Element pairs (lower, upper) in the target, for the separation.
     target_pairs: Vec<(u32, u32)>,
-    /// Connective links outside the target.
-    outside: Vec<LinkId>,
-    /// Links (any kind) in a forbidden region.
-    forbidden: Vec<LinkId>,
+    /// Connective links outside the target, with their area (mm²).
+    outside: Vec<Weighted>,
+    /// Links in a forbidden region: in-layer links, then connective ones.
+    forbidden: [Vec<Weighted>; 2],
     /// In-layer links whose cutting is damage (all but the upper layer's along the planned incision).
-    penalised: Vec<LinkId>,
+    penalised: Vec<Weighted>,
+    /// Millimetres per metre of a layer's extent on a surface, square millimetres per square metre in
+    /// a volume.
+    layer_unit: f32,
     /// For each point of the planned incision, the upper-layer links whose cut counts for it.
     incision: Vec<Vec<LinkId>>,
     rest_gap: f32,
@@ -218,8 +295,12 @@ impl Assessor {
         let mut incision = vec![Vec::new(); points.len()];
         // Layers count from the upper one.
         let upper = LinkKind::Layer(0);
-        let (mut target, mut outside, mut forbidden, mut target_pairs) = (vec![], vec![], vec![], vec![]);
-        let mut penalised = vec![];
+        let (mut target, mut outside, mut target_pairs) = (vec![], vec![], vec![]);
+        let (mut penalised, mut forbidden) = (vec![], [vec![], vec![]]);
+        let layer_unit = match tissue.geometry() {
+            crate::tissue::Geometry::Surface(_) => 1e3,
+            crate::tissue::Geometry::Volume => 1e6,
+        };
         let mut rest_gap = 0.0;
         for l in 0..tissue.body().link_count() {
             let id = LinkId(l as u32);
@@ -227,8 +308,10 @@ impl Assessor {
             let (pa, pb) = (rest[a.index()], rest[b.index()]);
             let mid = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2])];
             let (u, v) = tissue.surface_fractions(mid);
+            let connective = tissue.link_kind(id) == Some(LinkKind::Connective);
+            let extent = tissue.link_extent(id) * if connective { 1e6 } else { layer_unit };
             if goals.forbidden.iter().any(|r| r.contains(u, v)) {
-                forbidden.push(id);
+                forbidden[usize::from(connective)].push((id, extent));
             }
             match tissue.link_kind(id) {
                 Some(LinkKind::Connective) => {
@@ -237,7 +320,7 @@ impl Assessor {
                         target_pairs.push((a.0, b.0));
                         rest_gap = (pb[2] - pa[2]).abs();
                     } else {
-                        outside.push(id);
+                        outside.push((id, extent));
                     }
                 }
                 Some(kind) => {
@@ -247,7 +330,7 @@ impl Assessor {
                             .windows(2)
                             .any(|w| point_segment_dist(m, w[0], w[1]) <= INCISION_ALLOWANCE * judged);
                     if !near {
-                        penalised.push(id);
+                        penalised.push((id, extent));
                     }
                     if kind == upper {
                         for (k, p) in points.iter().enumerate() {
@@ -273,6 +356,7 @@ impl Assessor {
             outside,
             forbidden,
             penalised,
+            layer_unit,
             incision,
             rest_gap,
             steps: 0,
@@ -435,10 +519,22 @@ impl Assessor {
         let body = tissue.body();
         let separation = self.separation(tissue);
         let damage = tissue.damage();
-        let layer_cut =
-            self.penalised.iter().filter(|&&l| body.link_broken(l) == Some(BreakReason::Cut)).count() as u64;
-        let outside = self.outside.iter().filter(|&&l| body.link_broken(l).is_some()).count() as u32;
-        let forbidden = self.forbidden.iter().filter(|&&l| body.link_broken(l).is_some()).count() as u32;
+        let is_cut = |l: LinkId| body.link_broken(l) == Some(BreakReason::Cut);
+        let is_broken = |l: LinkId| body.link_broken(l).is_some();
+        let layer_cut = self.penalised.iter().filter(|(l, _)| is_cut(*l)).count() as u64;
+        let outside = self.outside.iter().filter(|(l, _)| is_broken(*l)).count() as u32;
+        let forbidden = self.forbidden.iter().flatten().filter(|(l, _)| is_broken(*l)).count() as u32;
+        // The same damage in physical amounts (mm of a layer on a surface, mm² otherwise).
+        let layer_mm = broken_extent(&self.penalised, is_cut);
+        let outside_mm2 = broken_extent(&self.outside, is_broken);
+        let forbidden_mm = self.forbidden.each_ref().map(|links| broken_extent(links, is_broken));
+        let torn_mm = [damage.layer_torn * self.layer_unit, damage.connective_torn_m2 * 1e6];
+        let areas = self.layer_unit > 1e3;
+        let lu = if areas { "mm²" } else { "mm" };
+        let r = RATES;
+        let forbidden_points = r.forbidden[0] * forbidden_mm[0] + r.forbidden[1] * forbidden_mm[1];
+        let torn_points = r.torn[0] * torn_mm[0] + r.torn[1] * torn_mm[1];
+        let amount = |[layer, fibre]: [f32; 2]| amount_text(layer, fibre, areas);
         let elapsed = self.elapsed_s();
         let above = self.steps_above as f32 * self.dt;
         let over_time = self.goals.time_limit_s.is_some_and(|l| elapsed > l);
@@ -465,13 +561,32 @@ impl Assessor {
                 label: "economy (20 x reference path over path length, x completion)".into(),
                 points: 20.0 * economy * completion,
             },
-            ScoreItem { label: "layer links cut (-2 each)".into(), points: -2.0 * layer_cut as f32 },
-            ScoreItem { label: "fibres cut outside the target (-1 each)".into(), points: -(outside as f32) },
             ScoreItem {
-                label: "links broken in a forbidden region (-5 each)".into(),
-                points: -5.0 * forbidden as f32,
+                label: if incision.is_some() {
+                    format!("layers cut off the planned incision (-{} per {lu})", r.layer_cut)
+                } else {
+                    format!("layers cut (-{} per {lu})", r.layer_cut)
+                },
+                points: 0.0 - r.layer_cut * layer_mm,
             },
-            ScoreItem { label: "links torn (-2 each)".into(), points: -2.0 * damage.links_torn as f32 },
+            ScoreItem {
+                label: format!("fibres cut outside the target (-{} per mm²)", r.fibre_cut),
+                points: 0.0 - r.fibre_cut * outside_mm2,
+            },
+            ScoreItem {
+                label: format!(
+                    "tissue broken in a forbidden region (-{} per {lu} of layer, -{} per mm² of fibres)",
+                    r.forbidden[0], r.forbidden[1]
+                ),
+                points: 0.0 - forbidden_points,
+            },
+            ScoreItem {
+                label: format!(
+                    "tissue torn (-{} per {lu} of layer, -{} per mm² of fibres)",
+                    r.torn[0], r.torn[1]
+                ),
+                points: 0.0 - torn_points,
+            },
             ScoreItem {
                 label: "time above the stretch limit (-10 per second)".into(),
                 points: -10.0 * above,
@@ -519,36 +634,34 @@ impl Assessor {
                 1000.0 * g.path_reference_m
             ),
         ));
-        let plural =
-            |n: u64, one: &str, many: &str| if n == 1 { one.to_string() } else { format!("{n} {many}") };
-        let layer_cuts = plural(layer_cut, "one link of a layer was", "links of the layers were");
         lost.push((
-            2.0 * layer_cut as f32,
+            r.layer_cut * layer_mm,
             if incision.is_some() {
-                format!("Cut only along the planned incision, at depth U: {layer_cuts} cut elsewhere.")
+                format!(
+                    "Cut only along the planned incision, at depth U: {layer_mm:.1} {lu} of the layers cut elsewhere."
+                )
             } else {
-                format!("Do not cut through the layers (depth B cuts only the fibres): {layer_cuts} cut.")
+                format!(
+                    "Do not cut through the layers (depth B cuts only the fibres): {layer_mm:.1} {lu} of them cut."
+                )
             },
         ));
         lost.push((
-            outside as f32,
-            format!(
-                "Keep the fibre cuts under the target: {} cut outside it.",
-                plural(outside.into(), "one fibre was", "fibres were")
-            ),
+            r.fibre_cut * outside_mm2,
+            format!("Keep the fibre cuts under the target: {outside_mm2:.1} mm² of fibres cut outside it."),
         ));
         lost.push((
-            5.0 * forbidden as f32,
+            forbidden_points,
             format!(
                 "Stay clear of the forbidden region (the vessel): {} broken there.",
-                plural(forbidden.into(), "one link was", "links were")
+                amount(forbidden_mm)
             ),
         ));
         lost.push((
-            2.0 * damage.links_torn as f32,
+            torn_points,
             format!(
                 "Pull more gently, and cut what holds the tissue first: {} stretched until it tore.",
-                plural(damage.links_torn, "one link was", "links were")
+                amount(torn_mm)
             ),
         ));
         lost.push((
@@ -578,9 +691,16 @@ impl Assessor {
             target_links_cut: cut,
             separation_m: separation,
             layer_links_cut: layer_cut,
+            layer_cut: layer_mm / self.layer_unit,
             connective_cut_outside: outside,
+            connective_cut_outside_m2: outside_mm2 * 1e-6,
             forbidden_links_broken: forbidden,
+            forbidden_layer: forbidden_mm[0] / self.layer_unit,
+            forbidden_connective_m2: forbidden_mm[1] * 1e-6,
             links_torn: damage.links_torn,
+            layer_torn: damage.layer_torn,
+            connective_torn_m2: damage.connective_torn_m2,
+            layers_are_areas: areas,
             peak_stretch: self.peak_stretch,
             time_above_limit_s: above,
             elapsed_s: elapsed,

@@ -33,10 +33,13 @@ impl View for AssessmentPanel {
             }
             row("target fibres cut", format!("{} / {}", a.target_links_cut, a.target_links), false);
             row("separation", format!("{:.1} mm", 1000.0 * a.separation_m), false);
-            row("fibres cut outside", a.connective_cut_outside.to_string(), a.connective_cut_outside > 0);
-            row("layer links cut", a.layer_links_cut.to_string(), a.layer_links_cut > 0);
-            row("forbidden broken", a.forbidden_links_broken.to_string(), a.forbidden_links_broken > 0);
-            row("torn", a.links_torn.to_string(), a.links_torn > 0);
+            let fibres_out = format!("{:.1} mm²", 1e6 * a.connective_cut_outside_m2);
+            row("fibres cut outside", fibres_out, a.connective_cut_outside > 0);
+            let elsewhere = if a.incision.is_some() { "layers cut off the line" } else { "layers cut" };
+            row(elsewhere, a.amount(a.layer_cut, 0.0), a.layer_links_cut > 0);
+            let forbidden = a.amount(a.forbidden_layer, a.forbidden_connective_m2);
+            row("forbidden broken", forbidden, a.forbidden_links_broken > 0);
+            row("torn", a.amount(a.layer_torn, a.connective_torn_m2), a.links_torn > 0);
             row("peak stretch", format!("{:.2} (limit {limit:.2})", a.peak_stretch), a.peak_stretch > limit);
             row("time above limit", format!("{:.2} s", a.time_above_limit_s), a.time_above_limit_s > 0.0);
             row("elapsed", format!("{:.1} s", a.elapsed_s), a.over_time);

@@ -79,12 +79,12 @@ impl View for ForcePanel {
             let s = &a.force;
             let warn = s.total.time_above_limit_s > 0.0;
             let text = format!(
-                "peak {:.2} N · mean {:.2} N · above limit {:.2} s · bandwidth {:.1} Hz · forbidden {:.2} N",
+                "peak {:.2} N · mean {:.2} N · above limit {:.2} s · bandwidth {:.1} Hz · forbidden {:.0} N/m",
                 s.total.peak_n,
                 s.total.mean_n,
                 s.total.time_above_limit_s,
                 s.total.bandwidth_hz,
-                s.forbidden_peak_n
+                s.forbidden_peak_n_per_m
             );
             if warn {
                 ui.colored_label(egui::Color32::from_rgb(255, 140, 100), text);
