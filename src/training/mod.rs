@@ -178,13 +178,15 @@ fn broken_extent(links: &[Weighted], broken: impl Fn(LinkId) -> bool) -> f32 {
 }
 
 /// "2.5 mm of layer and 3.0 mm² of fibres" for a layer's amount in millimetres (square millimetres
-/// when `areas`) and a fibres' in square millimetres, leaving out a part that is nothing.
+/// when `areas`) and a fibres' in square millimetres, leaving out a part that is nothing ("none" when
+/// both are).
 fn amount_text(layer: f32, fibre: f32, areas: bool) -> String {
     let lu = if areas { "mm²" } else { "mm" };
     match (layer > 0.0, fibre > 0.0) {
         (true, true) => format!("{layer:.1} {lu} of layer and {fibre:.1} mm² of fibres"),
         (false, true) => format!("{fibre:.1} mm² of fibres"),
-        _ => format!("{layer:.1} {lu} of layer"),
+        (true, false) => format!("{layer:.1} {lu} of layer"),
+        (false, false) => "none".into(),
     }
 }
 
@@ -740,5 +742,29 @@ impl Assessor {
             assessment,
             history: report::downsample(&history, REPORT_SAMPLES),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn amounts_read_in_millimetres_and_leave_out_what_is_nothing() {
+        let surface = Assessment::default();
+        assert_eq!(surface.amount(0.0, 0.0), "none");
+        assert_eq!(surface.amount(0.005, 0.0), "5.0 mm of layer");
+        assert_eq!(surface.amount(0.0, 2.5e-6), "2.5 mm² of fibres");
+        assert_eq!(surface.amount(0.0125, 3e-5), "12.5 mm of layer and 30.0 mm² of fibres");
+        let volume = Assessment { layers_are_areas: true, ..Assessment::default() };
+        assert_eq!(volume.amount(4e-6, 0.0), "4.0 mm² of layer");
+    }
+
+    #[test]
+    fn broken_extent_sums_only_the_broken_links() {
+        let links = [(LinkId(0), 1.5), (LinkId(1), 2.0), (LinkId(2), 0.25)];
+        assert_eq!(broken_extent(&links, |l| l.0 != 1), 1.75);
+        // Nothing broken is zero, not negative zero (shown as "-0.0" otherwise).
+        assert!(broken_extent(&links, |_| false).is_sign_positive());
     }
 }
