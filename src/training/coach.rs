@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::Assessor;
+use crate::chainmail::LinkId;
 use crate::simulation::{InstrumentKind, World};
 
 /// How urgent a piece of advice is.
@@ -37,16 +38,24 @@ impl Assessor {
     /// Intact connective fibres under the target stretched by a lift (their upper end pulled away from
     /// the lower): the ones the trainee is to cut. Fibres outside the target are not counted: cutting
     /// them is damage, so the coach never asks for it.
-    pub fn holding_fibres(&self, world: &World) -> u32 {
+    fn holding<'a>(&'a self, world: &'a World) -> impl Iterator<Item = LinkId> + 'a {
         let body = world.tissue().body();
         let p = body.positions();
-        self.target
-            .iter()
-            .zip(&self.target_pairs)
-            .filter(|&(&l, &(a, b))| {
-                body.link_intact(l) && p[b as usize][2] - p[a as usize][2] - self.rest_gap > HOLDING_M
-            })
-            .count() as u32
+        self.target.iter().zip(&self.target_pairs).filter_map(move |(&l, &(a, b))| {
+            (body.link_intact(l) && p[b as usize][2] - p[a as usize][2] - self.rest_gap > HOLDING_M)
+                .then_some(l)
+        })
+    }
+
+    /// How many fibres under the target hold a lifted layer: intact, stretched by a lift.
+    pub fn holding_fibres(&self, world: &World) -> u32 {
+        self.holding(world).count() as u32
+    }
+
+    /// The area of the layers' interface those fibres stand for, square metres: the same at every
+    /// resolution.
+    pub fn holding_area_m2(&self, world: &World) -> f32 {
+        self.holding(world).fold(0.0, |sum, l| sum + world.tissue().link_extent(l))
     }
 
     /// What stops the trainee now, if anything: a tear in the last few seconds, a stretch near or over
@@ -55,13 +64,13 @@ impl Assessor {
         let tissue = world.tissue();
         let limit = self.goals.stretch_limit;
         let upper = tissue.layers().first().map_or("tissue", |l| l.name.as_str());
-        if let Some((at, n)) = self.last_tear
+        if let Some((at, [layer, fibre])) = self.last_tear
             && self.steps.saturating_sub(at) < self.coach_window()
         {
-            let what = if n == 1 { "A link tore".to_string() } else { format!("{n} links tore") };
+            let what = super::amount_text(layer, fibre, self.layer_unit > 1e3);
             return Some(Advice {
                 text: format!(
-                    "{what}: the tissue was stretched until it gave way. Pull more gently, and cut what holds it first."
+                    "The tissue tore ({what}): it was stretched until it gave way. Pull more gently, and cut what holds it first."
                 ),
                 level: AdviceLevel::Alarm,
             });
@@ -84,12 +93,12 @@ impl Assessor {
             let (t, p) = (inst.target, inst.tip);
             let lag = ((t[0] - p[0]).powi(2) + (t[1] - p[1]).powi(2) + (t[2] - p[2]).powi(2)).sqrt();
             if lag > STALL_M {
-                let held = self.holding_fibres(world);
+                let held = self.holding_area_m2(world) * 1e6;
                 let text = if self.incision_share(tissue).is_some_and(|s| s < 0.95) {
                     format!("held by the uncut {upper}: finish the incision first (2, then U)")
-                } else if held > 0 {
+                } else if held > 0.0 {
                     format!(
-                        "held by {held} uncut fibres under the target: cut them between the layers (2 for the scalpel, B for the depth)"
+                        "held by uncut fibres under the target ({held:.0} mm² of them): cut them between the layers (2 for the scalpel, B for the depth)"
                     )
                 } else {
                     format!("the {upper} is held beyond the target: it will not come further this way")

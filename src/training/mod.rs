@@ -180,7 +180,7 @@ fn broken_extent(links: &[Weighted], broken: impl Fn(LinkId) -> bool) -> f32 {
 /// "2.5 mm of layer and 3.0 mm² of fibres" for a layer's amount in millimetres (square millimetres
 /// when `areas`) and a fibres' in square millimetres, leaving out a part that is nothing ("none" when
 /// both are).
-fn amount_text(layer: f32, fibre: f32, areas: bool) -> String {
+pub(crate) fn amount_text(layer: f32, fibre: f32, areas: bool) -> String {
     let lu = if areas { "mm²" } else { "mm" };
     match (layer > 0.0, fibre > 0.0) {
         (true, true) => format!("{layer:.1} {lu} of layer and {fibre:.1} mm² of fibres"),
@@ -267,9 +267,10 @@ pub struct Assessor {
     next_sample: f32,
     force: force::ForceMeter,
     steps_done: Vec<bool>,
-    torn_seen: u64,
-    /// When links last tore (steps observed) and how many.
-    last_tear: Option<(u64, u64)>,
+    /// Links torn so far, and how much of the layers and fibres (mm or mm², then mm²) they stand for.
+    torn_seen: (u64, [f32; 2]),
+    /// When links last tore (steps observed) and how much tore then (mm or mm² of layer, mm² of fibres).
+    last_tear: Option<(u64, [f32; 2])>,
 }
 
 impl Assessor {
@@ -375,7 +376,7 @@ impl Assessor {
             next_sample: 0.0,
             force,
             steps_done,
-            torn_seen: 0,
+            torn_seen: (0, [0.0; 2]),
             last_tear: None,
         }
     }
@@ -423,12 +424,17 @@ impl Assessor {
         self.grasping = grasping;
         self.held_since_sample |= grasping;
         self.force.observe(world);
-        let torn = world.tissue().damage().links_torn;
-        if torn > self.torn_seen {
-            let before =
-                self.last_tear.filter(|(s, _)| self.steps - s < self.coach_window()).map_or(0, |t| t.1);
-            self.last_tear = Some((self.steps, before + torn - self.torn_seen));
-            self.torn_seen = torn;
+        let damage = world.tissue().damage();
+        if damage.links_torn > self.torn_seen.0 {
+            let amount = [damage.layer_torn * self.layer_unit, damage.connective_torn_m2 * 1e6];
+            let before = self
+                .last_tear
+                .filter(|(s, _)| self.steps - s < self.coach_window())
+                .map_or([0.0; 2], |t| t.1);
+            let seen = self.torn_seen.1;
+            let new = [0, 1].map(|k| before[k] + amount[k] - seen[k]);
+            self.last_tear = Some((self.steps, new));
+            self.torn_seen = (damage.links_torn, amount);
         }
         let t = self.elapsed_s();
         if t >= self.next_sample {
