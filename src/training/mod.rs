@@ -53,6 +53,10 @@ pub struct Assessment {
     pub target_links: u32,
     /// Of those, cut.
     pub target_links_cut: u32,
+    /// The area of the layers' interface under the target that its fibres hold, square metres (the
+    /// same at every resolution, where `target_links` is not).
+    #[serde(default)]
+    pub target_m2: f32,
     /// Mean separation of the layers over the target beyond their rest gap, metres.
     pub separation_m: f32,
     /// In-layer links cut away from the planned incision: collateral damage. A count of links, so it
@@ -236,6 +240,8 @@ pub struct Assessor {
     dt: f32,
     /// Connective links whose foot lies in the target.
     target: Vec<LinkId>,
+    /// The area they hold, square metres.
+    target_m2: f32,
     /// Element pairs (lower, upper) in the target, for the separation.
     target_pairs: Vec<(u32, u32)>,
     /// Connective links outside the target, with their area (mm²).
@@ -346,6 +352,7 @@ impl Assessor {
                 None => {}
             }
         }
+        let target_m2 = target.iter().fold(0.0, |sum, &l| sum + tissue.link_extent(l));
         let tissue = world.tissue();
         let in_forbidden =
             force::elements_in(tissue, |u, v| goals.forbidden.iter().any(|r| r.contains(u, v)));
@@ -355,6 +362,7 @@ impl Assessor {
             goals,
             dt: world.step_seconds() as f32,
             target,
+            target_m2,
             target_pairs,
             outside,
             forbidden,
@@ -622,8 +630,9 @@ impl Assessor {
         lost.push((
             fibre_weight * (1.0 - fibres),
             format!(
-                "Cut the fibres under the target: {cut} of {} cut (scalpel at depth B, under the lifted {upper}).",
-                self.target.len()
+                "Cut the fibres under the target: {:.0} % of its {:.0} mm² cut (scalpel at depth B, under the lifted {upper}).",
+                100.0 * fibres,
+                1e6 * self.target_m2
             ),
         ));
         lost.push((
@@ -697,6 +706,7 @@ impl Assessor {
             fibres,
             target_links: self.target.len() as u32,
             target_links_cut: cut,
+            target_m2: self.target_m2,
             separation_m: separation,
             layer_links_cut: layer_cut,
             layer_cut: layer_mm / self.layer_unit,

@@ -31,7 +31,8 @@ impl View for AssessmentPanel {
             if let Some(i) = a.incision {
                 row("incision cut", format!("{:.0} %", 100.0 * i), false);
             }
-            row("target fibres cut", format!("{} / {}", a.target_links_cut, a.target_links), false);
+            let target = format!("{:.0} % of {:.0} mm²", 100.0 * a.fibres, 1e6 * a.target_m2);
+            row("target fibres cut", target, false);
             row("separation", format!("{:.1} mm", 1000.0 * a.separation_m), false);
             let fibres_out = format!("{:.1} mm²", 1e6 * a.connective_cut_outside_m2);
             row("fibres cut outside", fibres_out, a.connective_cut_outside > 0);
