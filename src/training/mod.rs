@@ -605,7 +605,7 @@ impl Assessor {
             },
             ScoreItem {
                 label: "time above the stretch limit (-10 per second)".into(),
-                points: -10.0 * above,
+                points: 0.0 - 10.0 * above,
             },
         ];
         if over_time {
