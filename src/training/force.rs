@@ -154,8 +154,8 @@ impl ForceMeter {
     }
 
     /// The largest tension in a forbidden link touching the disturbed region (links elsewhere have not
-    /// moved since they were last looked at).
-    /// Returns the largest tension, then the largest tension over width of a layer link.
+    /// moved since they were last looked at), then the largest tension over its width of such a link
+    /// of a layer.
     fn forbidden_tension(&self, tissue: &Tissue) -> [f32; 2] {
         let (mut peak, mut per_width) = (0.0f32, 0.0f32);
         for &e in tissue.active_elements() {
