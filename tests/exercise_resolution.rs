@@ -63,16 +63,21 @@ fn play(script: &str, [nu, nv]: [u32; 2]) -> Played {
     Played { assessment: out.metrics.assessment.expect("goals"), torn: out.metrics.links_torn, midline }
 }
 
+/// The smallest and the largest of `figures`.
+fn spread(figures: &[f32]) -> (f32, f32) {
+    figures.iter().fold((f32::MAX, f32::MIN), |(l, h), &f| (l.min(f), h.max(f)))
+}
+
 /// Asserts that positive `figures` (one per resolution) lie within `tolerance` of each other.
 fn alike(what: &str, figures: &[f32], tolerance: f32) {
-    let (lo, hi) = figures.iter().fold((f32::MAX, f32::MIN), |(l, h), &f| (l.min(f), h.max(f)));
+    let (lo, hi) = spread(figures);
     assert!(lo > 0.0 && hi <= (1.0 + tolerance) * lo, "{what} {figures:?} differ by more than {tolerance}");
 }
 
 /// Asserts that the runs' scores lie within `points` of each other.
 fn scores_within(runs: &[Played], points: f32) {
     let scores: Vec<f32> = runs.iter().map(|r| r.assessment.score).collect();
-    let (lo, hi) = scores.iter().fold((f32::MAX, f32::MIN), |(l, h), &s| (l.min(s), h.max(s)));
+    let (lo, hi) = spread(&scores);
     assert!(hi - lo <= points, "scores {scores:?} differ by more than {points} points");
 }
 

@@ -67,7 +67,7 @@ impl Assessor {
         if let Some((at, [layer, fibre])) = self.last_tear
             && self.steps.saturating_sub(at) < self.coach_window()
         {
-            let what = super::amount_text(layer, fibre, self.layer_unit > 1e3);
+            let what = super::amount_text(layer, fibre, self.layers_are_areas);
             return Some(Advice {
                 text: format!(
                     "The tissue tore ({what}): it was stretched until it gave way. Pull more gently, and cut what holds it first."

@@ -119,8 +119,7 @@ impl Assessment {
     /// fibres" for a layer's amount in metres (square metres in a volume) and a fibres' in square
     /// metres.
     pub fn amount(&self, layer: f32, fibre_m2: f32) -> String {
-        let unit = if self.layers_are_areas { 1e6 } else { 1e3 };
-        amount_text(layer * unit, fibre_m2 * 1e6, self.layers_are_areas)
+        amount_text(layer * layer_unit(self.layers_are_areas), fibre_m2 * 1e6, self.layers_are_areas)
     }
 }
 
@@ -176,9 +175,9 @@ const RATES: Rates = Rates { layer_cut: 1.6, fibre_cut: 0.3, forbidden: [4.0, 1.
 /// millimetres.
 type Weighted = (LinkId, f32);
 
-/// The sum of the weights of the links in `links` for which `broken` holds.
-fn broken_extent(links: &[Weighted], broken: impl Fn(LinkId) -> bool) -> f32 {
-    links.iter().filter(|(l, _)| broken(*l)).fold(0.0, |sum, (_, w)| sum + w)
+/// How many of `links` are broken (by `broken`'s test), and the sum of their weights.
+fn broken_extent(links: &[Weighted], broken: impl Fn(LinkId) -> bool) -> (u32, f32) {
+    links.iter().filter(|(l, _)| broken(*l)).fold((0, 0.0), |(n, sum), (_, w)| (n + 1, sum + w))
 }
 
 /// "2.5 mm of layer and 3.0 mm² of fibres" for a layer's amount in millimetres (square millimetres
@@ -250,9 +249,8 @@ pub struct Assessor {
     forbidden: [Vec<Weighted>; 2],
     /// In-layer links whose cutting is damage (all but the upper layer's along the planned incision).
     penalised: Vec<Weighted>,
-    /// Millimetres per metre of a layer's extent on a surface, square millimetres per square metre in
-    /// a volume.
-    layer_unit: f32,
+    /// Whether a layer's amounts are areas (a volume) rather than lengths (a surface).
+    layers_are_areas: bool,
     /// For each point of the planned incision, the upper-layer links whose cut counts for it.
     incision: Vec<Vec<LinkId>>,
     rest_gap: f32,
@@ -279,7 +277,19 @@ pub struct Assessor {
     last_tear: Option<(u64, [f32; 2])>,
 }
 
+/// Millimetres per metre of a layer's amounts on a surface, square millimetres per square metre in
+/// a volume.
+fn layer_unit(areas: bool) -> f32 {
+    if areas { 1e6 } else { 1e3 }
+}
+
 impl Assessor {
+    /// How much tore so far: millimetres of layer (square millimetres in a volume), then square
+    /// millimetres of fibres.
+    fn torn(&self, damage: &crate::tissue::Damage) -> [f32; 2] {
+        [damage.layer_torn * layer_unit(self.layers_are_areas), damage.connective_torn_m2 * 1e6]
+    }
+
     /// An assessor for `goals` on `world`'s tissue, reading time from the world's step length.
     pub fn new(goals: Goals, world: &World) -> Self {
         let tissue = world.tissue();
@@ -306,10 +316,8 @@ impl Assessor {
         let upper = LinkKind::Layer(0);
         let (mut target, mut outside, mut target_pairs) = (vec![], vec![], vec![]);
         let (mut penalised, mut forbidden) = (vec![], [vec![], vec![]]);
-        let layer_unit = match tissue.geometry() {
-            crate::tissue::Geometry::Surface(_) => 1e3,
-            crate::tissue::Geometry::Volume => 1e6,
-        };
+        let layers_are_areas = matches!(tissue.geometry(), crate::tissue::Geometry::Volume);
+        let layer_unit = layer_unit(layers_are_areas);
         let mut rest_gap = 0.0;
         for l in 0..tissue.body().link_count() {
             let id = LinkId(l as u32);
@@ -367,7 +375,7 @@ impl Assessor {
             outside,
             forbidden,
             penalised,
-            layer_unit,
+            layers_are_areas,
             incision,
             rest_gap,
             steps: 0,
@@ -434,7 +442,7 @@ impl Assessor {
         self.force.observe(world);
         let damage = world.tissue().damage();
         if damage.links_torn > self.torn_seen.0 {
-            let amount = [damage.layer_torn * self.layer_unit, damage.connective_torn_m2 * 1e6];
+            let amount = self.torn(&damage);
             let before = self
                 .last_tear
                 .filter(|(s, _)| self.steps - s < self.coach_window())
@@ -537,15 +545,16 @@ impl Assessor {
         let damage = tissue.damage();
         let is_cut = |l: LinkId| body.link_broken(l) == Some(BreakReason::Cut);
         let is_broken = |l: LinkId| body.link_broken(l).is_some();
-        let layer_cut = self.penalised.iter().filter(|(l, _)| is_cut(*l)).count() as u64;
-        let outside = self.outside.iter().filter(|(l, _)| is_broken(*l)).count() as u32;
-        let forbidden = self.forbidden.iter().flatten().filter(|(l, _)| is_broken(*l)).count() as u32;
-        // The same damage in physical amounts (mm of a layer on a surface, mm² otherwise).
-        let layer_mm = broken_extent(&self.penalised, is_cut);
-        let outside_mm2 = broken_extent(&self.outside, is_broken);
-        let forbidden_mm = self.forbidden.each_ref().map(|links| broken_extent(links, is_broken));
-        let torn_mm = [damage.layer_torn * self.layer_unit, damage.connective_torn_m2 * 1e6];
-        let areas = self.layer_unit > 1e3;
+        // Links broken, and the same damage in physical amounts (mm of a layer on a surface, mm²
+        // otherwise).
+        let (layer_cut, layer_mm) = broken_extent(&self.penalised, is_cut);
+        let (outside, outside_mm2) = broken_extent(&self.outside, is_broken);
+        let [(forbidden_layer, forbidden_layer_mm), (forbidden_fibres, forbidden_fibres_mm2)] =
+            self.forbidden.each_ref().map(|links| broken_extent(links, is_broken));
+        let (forbidden, forbidden_mm) =
+            (forbidden_layer + forbidden_fibres, [forbidden_layer_mm, forbidden_fibres_mm2]);
+        let torn_mm = self.torn(&damage);
+        let (areas, layer_unit) = (self.layers_are_areas, layer_unit(self.layers_are_areas));
         let lu = if areas { "mm²" } else { "mm" };
         let r = RATES;
         let forbidden_points = r.forbidden[0] * forbidden_mm[0] + r.forbidden[1] * forbidden_mm[1];
@@ -708,12 +717,12 @@ impl Assessor {
             target_links_cut: cut,
             target_m2: self.target_m2,
             separation_m: separation,
-            layer_links_cut: layer_cut,
-            layer_cut: layer_mm / self.layer_unit,
+            layer_links_cut: layer_cut.into(),
+            layer_cut: layer_mm / layer_unit,
             connective_cut_outside: outside,
             connective_cut_outside_m2: outside_mm2 * 1e-6,
             forbidden_links_broken: forbidden,
-            forbidden_layer: forbidden_mm[0] / self.layer_unit,
+            forbidden_layer: forbidden_mm[0] / layer_unit,
             forbidden_connective_m2: forbidden_mm[1] * 1e-6,
             links_torn: damage.links_torn,
             layer_torn: damage.layer_torn,
@@ -779,8 +788,8 @@ mod tests {
     #[test]
     fn broken_extent_sums_only_the_broken_links() {
         let links = [(LinkId(0), 1.5), (LinkId(1), 2.0), (LinkId(2), 0.25)];
-        assert_eq!(broken_extent(&links, |l| l.0 != 1), 1.75);
+        assert_eq!(broken_extent(&links, |l| l.0 != 1), (2, 1.75));
         // Nothing broken is zero, not negative zero (shown as "-0.0" otherwise).
-        assert!(broken_extent(&links, |_| false).is_sign_positive());
+        assert!(broken_extent(&links, |_| false).1.is_sign_positive());
     }
 }
