@@ -39,6 +39,9 @@ pub struct Workspace {
     /// The completion takes its plain path whatever the widths (for the tests that compare the two).
     pub(crate) plain_pairs: bool,
 
+    /// A lift's rigid blocks (`reaction/lift.rs`).
+    pub(crate) lift: super::reaction::Lift,
+
     /// Relaxation's second buffer.
     pub(crate) next: Vec<[f32; 3]>,
     /// The grid tables of the body last fitted (`None` for other lattices), and the body's
@@ -94,7 +97,20 @@ impl Workspace {
         self.plain_pairs = plain;
     }
 
-    /// Elements moved by the last deformation, in the order they moved (the source first).
+    /// Lets the normal passes of lifts raise rigid blocks (`reaction/lift.rs`): `true` in a tissue's
+    /// workspace; `false` (every element taken one by one) by default.
+    pub fn set_rigid_blocks(&mut self, on: bool) {
+        self.lift.enabled = on;
+    }
+
+    /// Elements the last deformation raised as part of a rigid block and not otherwise: moved, but not
+    /// in [`Workspace::moved`].
+    pub fn raised_unlisted(&self) -> usize {
+        self.lift.unlisted_count
+    }
+
+    /// Elements moved by the last deformation, in the order they moved (the source first); with rigid
+    /// blocks on, not those raised with a block and left there ([`Workspace::raised_unlisted`]).
     pub fn moved(&self) -> impl ExactSizeIterator<Item = ElementId> + '_ {
         self.moved.iter().map(|&i| ElementId(i))
     }
@@ -119,10 +135,14 @@ impl Workspace {
         }
         self.generation += 1;
         self.moved.clear();
+        self.lift.clear_reaction();
     }
 
     /// Puts the elements the current deformation moved back where they were.
     pub(crate) fn rollback(&mut self, pos: &mut [[f32; 3]]) {
+        for &i in &self.lift.raised {
+            pos[i as usize] = self.old[i as usize];
+        }
         for &i in &self.moved {
             pos[i as usize] = self.old[i as usize];
         }

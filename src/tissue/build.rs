@@ -547,7 +547,12 @@ impl Tissue {
             region_scan: None,
             scan_keep: Vec::with_capacity(n),
             wide_scratch: Vec::new(),
-            ws: Workspace::new(&body),
+            ws: {
+                // A lift's taut tent rises a block at a time (`chainmail/reaction/lift.rs`).
+                let mut ws = Workspace::new(&body);
+                ws.set_rigid_blocks(true);
+                ws
+            },
             extent_lo,
             extent_span,
             geometry,

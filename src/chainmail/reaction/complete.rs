@@ -195,6 +195,8 @@ struct Moves<'a> {
     stamp: &'a mut [u32],
     sponsor: &'a mut [u32],
     moved: &'a mut Vec<u32>,
+    /// Raised elements not in `moved` yet, a bit each, and how many (`lift.rs`).
+    unlisted: (&'a mut [u64], &'a mut usize),
     g: u32,
 }
 
@@ -212,17 +214,11 @@ impl Body {
     pub(super) fn complete_pairs(
         &mut self,
         ws: &mut Workspace,
+        seeds: &[u32],
         measure: Option<Measure>,
         excess: &mut [f32; 3],
     ) -> Completion {
         let n = self.pos.len();
-        let mut bits = std::mem::take(&mut ws.pair_bits);
-        bits.clear();
-        bits.resize(n.div_ceil(64), 0);
-        let mut queue = Queue::new();
-        for k in 0..ws.moved.len() {
-            queue.push(&mut bits, ws.moved[k] as usize);
-        }
         let mut tally = Tally {
             moves: 0,
             cap: (MOVES_PER_ELEMENT * n).max(MIN_MOVES),
@@ -246,6 +242,18 @@ impl Body {
             class_z.resize(len, [f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY]);
             ws.class_z_key = key;
         }
+        // A lift's rigid blocks rise at once; their rim is checked with what the lists moved.
+        self.raise_rigid(ws, seeds, &class_z);
+        let mut bits = std::mem::take(&mut ws.pair_bits);
+        bits.clear();
+        bits.resize(n.div_ceil(64), 0);
+        let mut queue = Queue::new();
+        for k in 0..ws.moved.len() {
+            queue.push(&mut bits, ws.moved[k] as usize);
+        }
+        for k in 0..ws.lift.rim.len() {
+            queue.push(&mut bits, ws.lift.rim[k] as usize);
+        }
         let plain = ws.plain_pairs;
         let mut m = Moves {
             pos: &mut self.pos[..n],
@@ -253,6 +261,7 @@ impl Body {
             stamp: &mut ws.stamp[..n],
             sponsor: &mut ws.sponsor[..n],
             moved: &mut ws.moved,
+            unlisted: (&mut ws.lift.unlisted, &mut ws.lift.unlisted_count),
             g: ws.generation,
         };
         let b = Bounds {
@@ -331,6 +340,7 @@ impl Run<'_> {
         let stamp = &mut m.stamp[..n];
         let sponsor = &mut m.sponsor[..n];
         let moved = &mut *m.moved;
+        let (unlisted, unlisted_count) = (&mut *m.unlisted.0, &mut *m.unlisted.1);
         let bits = &mut *self.bits;
         let (mut queue, mut tally) = (*self.queue, *self.tally);
         while tally.goes_on() {
@@ -389,7 +399,8 @@ impl Run<'_> {
                         continue;
                     }
                 }
-                let mut m = Moves { pos, old, stamp, sponsor, moved, g };
+                let mut m =
+                    Moves { pos, old, stamp, sponsor, moved, unlisted: (unlisted, unlisted_count), g };
                 let met = meet(&mut m, flags, Bound { x, y, lo, hi });
                 tally.count(met, (&mut queue, bits), self.measure, self.excess);
                 if tally.stop {
@@ -490,6 +501,14 @@ fn meet(m: &mut Moves<'_>, flags: &[u8], Bound { x, y, lo, hi }: Bound) -> Met {
     if m.stamp[f] != m.g {
         m.old[f] = m.pos[f];
         m.stamp[f] = m.g;
+        m.sponsor[f] = leader as u32;
+        m.moved.push(f as u32);
+    } else if let Some(w) = m.unlisted.0.get_mut(f / 64)
+        && *w & (1 << (f % 64)) != 0
+    {
+        // Raised with a rigid block, and now moved on its own: listed as moved from where it was.
+        *w &= !(1 << (f % 64));
+        *m.unlisted.1 -= 1;
         m.sponsor[f] = leader as u32;
         m.moved.push(f as u32);
     }

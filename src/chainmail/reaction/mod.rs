@@ -12,6 +12,7 @@ use super::ids::ElementId;
 use super::lattice::{Lattice, SIDE_B};
 use super::workspace::{SearchScratch, Workspace};
 use arrays::{Moving, Patterns, Run, Slices, candidate_box, clamp_masked};
+pub(crate) use lift::Lift;
 use runs::{Wide, batch};
 
 mod arrays;
@@ -19,6 +20,7 @@ mod chunk;
 mod complete;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
+mod lift;
 mod runs;
 #[cfg(target_arch = "x86_64")]
 mod vector;
@@ -163,6 +165,8 @@ impl Body {
         let result = self.search(ws, &mut scratch, seeds, full, mask);
         if result.fraction == 0.0 {
             ws.next_generation();
+        } else if mask == Pass::Normal.mask() {
+            self.record_rigid(ws, &scratch.free);
         }
         if result.moved > 0 {
             self.note_motion();
@@ -223,7 +227,7 @@ impl Body {
         let done = |mut result: Deformation, ws: &Workspace, t: f32, body: &Body| {
             result.achieved = body.pos[first as usize];
             result.fraction = t.min(1.0);
-            result.moved = ws.moved.len() as u32;
+            result.moved = (ws.moved.len() + ws.lift.unlisted_count) as u32;
             result
         };
         result.attempts = 1;
@@ -459,7 +463,7 @@ impl Body {
         // The normal pass of a body with normal pairs: the lists above kept each element within its
         // sponsor's link; the pairs (and the links the pairs' moves disturb) are met after them.
         if MASK == 0b100 && self.pairs.any() && (!blocked || r.measure.is_some()) {
-            let done = self.complete_pairs(ws, r.measure, &mut excess);
+            let done = self.complete_pairs(ws, r.seeds, r.measure, &mut excess);
             blocked |= done.blocked;
             // A bound of a moved element left outside: the limits' repair hears of it.
             if !blocked {
