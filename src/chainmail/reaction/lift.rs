@@ -126,6 +126,11 @@ pub(crate) struct Lift {
     /// lattice [`Body::shape`] in `fibre_shape`.
     fibre_slot: Vec<u8>,
     fibre_shape: u64,
+    /// Each element's fibre bound on its height over its partner's, widened (`[-inf, inf]` for none):
+    /// read from the element's slot class once per block and body revision (`fibre_key`), not every
+    /// step (the classes' rows are the raise's slowest reads).
+    fibre_z: Vec<[f32; 2]>,
+    fibre_key: Vec<(u64, u64)>,
 }
 
 /// No fibre slot.
@@ -289,6 +294,11 @@ impl Body {
             }));
             lift.fibre_shape = self.shape;
         }
+        let key = (self.revision, self.boxes_epoch);
+        if grid.nz == 2 && (lift.fibre_z.len() != n || lift.fibre_key.len() != grid.blocks()) {
+            lift.fibre_z = vec![[f32::NEG_INFINITY, f32::INFINITY]; n];
+            lift.fibre_key = vec![(0, 0); grid.blocks()];
+        }
         for b in 0..grid.blocks() {
             if lift.rigid[b / 64] & (1 << (b % 64)) == 0 {
                 continue;
@@ -319,17 +329,28 @@ impl Body {
             if grid.nz < 2 || is_rigid(&lift.rigid, bxi, byi, 1 - k) == Some(true) {
                 continue;
             }
+            if lift.fibre_key[b] != key {
+                for c in 0..SIDE {
+                    let row = first + c * grid.nx;
+                    for e in row..row + SIDE {
+                        let t = lift.fibre_slot[e] as usize;
+                        lift.fibre_z[e] = if t < w {
+                            let [lo, hi, _, _] = class_z[slot_class[e * w + t] as usize & mask];
+                            [lo, hi]
+                        } else {
+                            [f32::NEG_INFINITY, f32::INFINITY]
+                        };
+                    }
+                }
+                lift.fibre_key[b] = key;
+            }
+            // The fibre, if any, joins an element to its place in the other layer.
+            let other = if k == 0 { layer as isize } else { -(layer as isize) };
             for c in 0..SIDE {
                 let row = first + c * grid.nx;
                 for e in row..row + SIDE {
-                    // The fibre, if any, joins the element to its place in the other layer.
-                    let t = lift.fibre_slot[e] as usize;
-                    if t >= w {
-                        continue;
-                    }
-                    let partner = if k == 0 { e + layer } else { e - layer };
-                    let [lo, hi, _, _] = class_z[slot_class[e * w + t] as usize & mask];
-                    let d = pos[e][2] - pos[partner][2];
+                    let [lo, hi] = lift.fibre_z[e];
+                    let d = pos[e][2] - pos[e.wrapping_add_signed(other)][2];
                     if d > hi || d < lo {
                         lift.rim.push(e as u32);
                     }
