@@ -79,8 +79,10 @@ impl Grid {
 
     /// The block element `e` lies in, if any.
     fn block_of(&self, e: usize) -> Option<usize> {
-        let (i, rest) = (e % self.nx, e / self.nx);
-        let (j, k) = (rest % self.ny, rest / self.ny);
+        // In 32 bits (element indices are), where division is several times faster.
+        let (e, nx, ny) = (u32::try_from(e).ok()?, self.nx as u32, self.ny as u32);
+        let (i, rest) = ((e % nx) as usize, e / nx);
+        let (j, k) = ((rest % ny) as usize, (rest / ny) as usize);
         let (bx, by) = (i / SIDE, j / SIDE);
         (bx < self.nbx && by < self.nby && k < self.nz).then(|| self.block(bx, by, k))
     }
