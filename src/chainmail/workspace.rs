@@ -115,16 +115,24 @@ impl Workspace {
         self.moved.iter().map(|&i| ElementId(i))
     }
 
-    /// The sponsor of an element moved by the last deformation (the source is its own sponsor).
+    /// The sponsor of an element moved by the last deformation (the source is its own sponsor; none for
+    /// an element only raised with a rigid block).
     pub fn sponsor(&self, e: ElementId) -> Option<ElementId> {
         let i = e.index();
-        (self.stamp.get(i) == Some(&self.generation) && self.generation != 0)
+        (self.stamp.get(i) == Some(&self.generation) && self.generation != 0 && !self.raised_only(i))
             .then(|| ElementId(self.sponsor[i]))
     }
 
-    /// An element's position before the last deformation, if it moved.
+    /// Whether element `i` was raised with a rigid block and not moved otherwise (it has no sponsor of
+    /// its own).
+    fn raised_only(&self, i: usize) -> bool {
+        self.lift.unlisted.get(i / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
+    }
+
+    /// An element's position before the last deformation, if it moved (with a rigid block too).
     pub fn old_position(&self, e: ElementId) -> Option<[f32; 3]> {
-        self.sponsor(e).map(|_| self.old[e.index()])
+        let i = e.index();
+        (self.stamp.get(i) == Some(&self.generation) && self.generation != 0).then(|| self.old[i])
     }
 
     /// Starts a new deformation: a fresh stamp, an empty moved list.
