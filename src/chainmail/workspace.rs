@@ -126,7 +126,7 @@ impl Workspace {
     /// Whether element `i` was raised with a rigid block and not moved otherwise (it has no sponsor of
     /// its own).
     fn raised_only(&self, i: usize) -> bool {
-        self.lift.unlisted.get(i / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
+        super::reaction::has_bit(&self.lift.unlisted, i)
     }
 
     /// An element's position before the last deformation, if it moved (with a rigid block too).

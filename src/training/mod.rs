@@ -614,6 +614,7 @@ impl Assessor {
             },
             ScoreItem {
                 label: "time above the stretch limit (-10 per second)".into(),
+                // (`0.0 -`: no time above reads +0.0, where `-10.0 * 0.0` is -0.0.)
                 points: 0.0 - 10.0 * above,
             },
         ];

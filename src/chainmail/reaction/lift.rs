@@ -124,19 +124,12 @@ pub(crate) struct Lift {
     pub(crate) rim: Vec<u32>,
     /// Per block, the elements that rose with the seeds (recording).
     count: Vec<u16>,
-    /// Each element's slot holding its fibre to the other layer (`NO_FIBRE` for none), for the
-    /// lattice [`Body::shape`] in `fibre_shape`.
-    fibre_slot: Vec<u8>,
-    fibre_shape: u64,
     /// Each element's fibre bound on its height over its partner's, widened (`[-inf, inf]` for none):
-    /// read from the element's slot class once per block and body revision (`fibre_key`), not every
-    /// step (the classes' rows are the raise's slowest reads).
+    /// read from the element's slots once per block and body revision (`fibre_key`), not every step
+    /// (the slots' rows are the raise's slowest reads).
     fibre_z: Vec<[f32; 2]>,
     fibre_key: Vec<(u64, u64)>,
 }
-
-/// No fibre slot.
-const NO_FIBRE: u8 = u8::MAX;
 
 impl Lift {
     /// Forgets this reaction's raise (its elements are back where they were, or accepted).
@@ -150,6 +143,12 @@ impl Lift {
         self.rim.clear();
         self.count.fill(0);
     }
+}
+
+/// Whether bit `i` is set (false past the words).
+#[inline(always)]
+pub(crate) fn has_bit(words: &[u64], i: usize) -> bool {
+    words.get(i / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
 }
 
 /// Sets `len` bits from bit `at` (not past the words).
@@ -213,14 +212,14 @@ impl Body {
         // No fixed element in a rigid block (the memory may predate a grasp).
         let flags = &self.flags[..n];
         for b in 0..grid.blocks() {
-            if lift.rigid[b / 64] & (1 << (b % 64)) == 0 {
+            if !has_bit(&lift.rigid, b) {
                 continue;
             }
             let first = grid.first(b);
             let fixed =
                 (0..SIDE).any(|c| flags[first + c * grid.nx..][..SIDE].iter().any(|&f| f & FIXED != 0));
             if fixed {
-                lift.rigid[b / 64] &= !(1 << (b % 64));
+                lift.rigid[b / 64] &= !(1 << (b % 64)); // not rigid after all
             }
         }
         if lift.rigid.iter().all(|&w| w == 0) {
@@ -234,15 +233,13 @@ impl Body {
         let g = ws.generation;
         let (pos, old, stamp) = (&mut self.pos[..n], &mut ws.old[..n], &mut ws.stamp[..n]);
         let is_rigid = |rigid: &[u64], bx: isize, by: isize, k: usize| -> Option<bool> {
-            (bx >= 0 && by >= 0 && (bx as usize) < grid.nbx && (by as usize) < grid.nby).then(|| {
-                let b = grid.block(bx as usize, by as usize, k);
-                rigid[b / 64] & (1 << (b % 64)) != 0
-            })
+            (bx >= 0 && by >= 0 && (bx as usize) < grid.nbx && (by as usize) < grid.nby)
+                .then(|| has_bit(rigid, grid.block(bx as usize, by as usize, k)))
         };
         lift.count.clear();
         lift.count.resize(grid.blocks(), 0);
         for b in 0..grid.blocks() {
-            if lift.rigid[b / 64] & (1 << (b % 64)) == 0 {
+            if !has_bit(&lift.rigid, b) {
                 continue;
             }
             let first = grid.first(b);
@@ -286,23 +283,13 @@ impl Body {
         let (w, mask) = (self.width, class_z.len().wrapping_sub(1));
         let (slot_nbr, slot_class) = (&self.slot_nbr[..n * w], &self.slot_class[..n * w]);
         let layer = grid.nx * grid.ny;
-        // Which slot holds each element's fibre (the lattice's, so made once per lattice).
-        if grid.nz == 2 && (lift.fibre_shape != self.shape || lift.fibre_slot.len() != n) {
-            lift.fibre_slot.clear();
-            lift.fibre_slot.extend((0..n).map(|e| {
-                let partner = if e < layer { e + layer } else { e - layer };
-                let row = &slot_nbr[e * w..e * w + w];
-                row.iter().position(|&y| y as usize == partner).map_or(NO_FIBRE, |t| t as u8)
-            }));
-            lift.fibre_shape = self.shape;
-        }
         let key = (self.revision, self.boxes_epoch);
         if grid.nz == 2 && (lift.fibre_z.len() != n || lift.fibre_key.len() != grid.blocks()) {
             lift.fibre_z = vec![[f32::NEG_INFINITY, f32::INFINITY]; n];
             lift.fibre_key = vec![(0, 0); grid.blocks()];
         }
         for b in 0..grid.blocks() {
-            if lift.rigid[b / 64] & (1 << (b % 64)) == 0 {
+            if !has_bit(&lift.rigid, b) {
                 continue;
             }
             let (bx, by, k) = grid.coords(b);
@@ -331,23 +318,26 @@ impl Body {
             if grid.nz < 2 || is_rigid(&lift.rigid, bxi, byi, 1 - k) == Some(true) {
                 continue;
             }
+            // The fibre, if any, joins an element to its place in the other layer.
+            let other = if k == 0 { layer as isize } else { -(layer as isize) };
             if lift.fibre_key[b] != key {
                 for c in 0..SIDE {
                     let row = first + c * grid.nx;
                     for e in row..row + SIDE {
-                        let t = lift.fibre_slot[e] as usize;
-                        lift.fibre_z[e] = if t < w {
-                            let [lo, hi, _, _] = class_z[slot_class[e * w + t] as usize & mask];
-                            [lo, hi]
-                        } else {
-                            [f32::NEG_INFINITY, f32::INFINITY]
+                        let partner = e.wrapping_add_signed(other);
+                        let slots = e * w..e * w + w;
+                        let t = slot_nbr[slots.clone()].iter().position(|&y| y as usize == partner);
+                        lift.fibre_z[e] = match t {
+                            Some(t) => {
+                                let [lo, hi, _, _] = class_z[slot_class[slots][t] as usize & mask];
+                                [lo, hi]
+                            }
+                            None => [f32::NEG_INFINITY, f32::INFINITY],
                         };
                     }
                 }
                 lift.fibre_key[b] = key;
             }
-            // The fibre, if any, joins an element to its place in the other layer.
-            let other = if k == 0 { layer as isize } else { -(layer as isize) };
             for c in 0..SIDE {
                 let row = first + c * grid.nx;
                 for e in row..row + SIDE {
@@ -382,7 +372,7 @@ impl Body {
                 let Some(b) = grid.block_of(e) else { continue };
                 let r = self.pos[e][2] - ws.old[e][2];
                 let with = (r - rise).abs() <= tol;
-                let raised = lift.raised_bits.get(e / 64).is_some_and(|w| w & (1 << (e % 64)) != 0);
+                let raised = has_bit(&lift.raised_bits, e);
                 lift.count[b] = match (with, raised) {
                     (true, true) => lift.count[b],
                     (true, false) => lift.count[b].saturating_add(1),
@@ -410,7 +400,7 @@ impl Body {
         memo.rose.resize(blocks.div_ceil(64), 0);
         for (b, &c) in count.iter().enumerate() {
             if c == FULL {
-                memo.rose[b / 64] |= 1 << (b % 64);
+                set_bits(&mut memo.rose, b, 1);
             }
         }
     }

@@ -12,7 +12,7 @@ use super::ids::ElementId;
 use super::lattice::{Lattice, SIDE_B};
 use super::workspace::{SearchScratch, Workspace};
 use arrays::{Moving, Patterns, Run, Slices, candidate_box, clamp_masked};
-pub(crate) use lift::Lift;
+pub(crate) use lift::{Lift, has_bit};
 use runs::{Wide, batch};
 
 mod arrays;
