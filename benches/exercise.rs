@@ -7,7 +7,8 @@
 //! (a step's cost depends on where in the script it falls, so the tail matters as much as the mean),
 //! with the p99 of the steps' CPU time (the thread's own: on a busy machine the wall time's tail is
 //! mostly other processes taking the core). When the script ends the world is rebuilt outside the
-//! timed region and the script starts again.
+//! timed region and the script starts again. The steps run as the trainer's simulation thread runs
+//! them: on a worker of a rayon pool of its own (`dissect::chainmail::worker_pool`).
 
 use std::time::{Duration, Instant};
 
@@ -59,6 +60,8 @@ impl Session {
 }
 
 fn exercise_benches(c: &mut Criterion) {
+    // Stepped as the trainer's simulation thread steps: a worker of a pool of its own.
+    let _pool = dissect::chainmail::worker_pool("bench").ok();
     let meninges = Script::from_str(CAREFUL, "meninges_careful.ron").expect("careful script");
     exercise(c, "meninges_careful", MENINGES, &meninges, &[(128, 96), (256, 192), (512, 384)]);
     let durotomy = Script::from_str(DUROTOMY_CAREFUL, "durotomy_careful.ron").expect("careful script");

@@ -31,6 +31,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "meninges_careful.ron".to_string(),
         ),
     };
+    // `TRACE_POOL=own` steps as the trainer's simulation thread does: as a worker of a pool of its
+    // own (`dissect::chainmail::worker_pool`), not beside rayon's global pool.
+    let _pool = match std::env::var("TRACE_POOL").as_deref() {
+        Ok("own") => Some(dissect::chainmail::worker_pool("trace")?),
+        _ => {
+            let _ = rayon::current_num_threads(); // the global pool's threads start now
+            None
+        }
+    };
+    // `TRACE_WAIT_MS`: a pause before the steps (to change the thread's scheduling from outside).
+    if let Some(ms) = std::env::var("TRACE_WAIT_MS").ok().and_then(|m| m.parse().ok()) {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
     let mut scene = Scene::from_str(&scene_text, &scene_name)?;
     if let SceneTissue::Layers(l) = &mut scene.tissue {
         l.resolution = [nu, nv];

@@ -264,6 +264,10 @@ fn run_headless(
         }
         None => None,
     };
+    // Stepped as the trainer's simulation thread steps: a worker of a pool of its own, so that a step
+    // never waits for a helper thread without a core (`chainmail::worker_pool`). Without one, rayon's
+    // global pool; the states are the same either way.
+    let _pool = dissect::chainmail::worker_pool("dissect-run").ok();
     let mut result = runner::run(
         &scene,
         &scene_path.display().to_string(),

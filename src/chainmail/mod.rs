@@ -70,5 +70,6 @@ pub use pairs::NormalPair;
 pub use reaction::{Deformation, Pass};
 pub(crate) use relax::sweeps_within;
 pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};
+pub use schedule::worker_pool;
 pub use simd::{SIMD_ENV, SimdLevel};
 pub use workspace::Workspace;

@@ -58,8 +58,9 @@ where
 ///
 /// As [`here_and_there`]: one pool thread is woken, and the caller spins briefly for the pool's last
 /// piece rather than sleeping. If no pool thread has started by the time the caller has taken the
-/// last piece, the caller does not spin for one; rayon's scope still waits (blocking) until a pool
-/// thread has run the job, which then finds no piece left, as it waits in [`here_and_there`].
+/// last piece, the caller does not spin for one; a caller outside the pool then still waits (blocking,
+/// rayon's scope) until a pool thread has run the job, which finds no piece left, as it waits in
+/// [`here_and_there`]; a worker of the pool ([`worker_pool`]) takes the job back and runs it itself.
 pub(crate) fn in_turns<W>(pieces: usize, work: W)
 where
     W: Fn(usize) + Sync,
@@ -91,6 +92,25 @@ where
     });
 }
 
+/// Makes the calling thread a worker of a new rayon pool of its own (thread 0; the others, named
+/// `name-1` and on, help it), as many threads as rayon's global pool would have (`RAYON_NUM_THREADS`,
+/// else the machine's cores). The pool lasts while the value is kept; the thread stays a worker until
+/// it is dropped.
+///
+/// Why: [`here_and_there`] and [`in_turns`] hand half of the work to a pool thread inside a rayon
+/// scope, and a scope waits until every job spawned in it has run. Called from outside the pool, the
+/// caller cannot run that job itself: when no pool thread has started it by the time the caller has
+/// done all the work (a machine whose other cores are busy: the trainer's windows drawing with a
+/// software rasteriser), the caller blocks until the scheduler gives a pool thread a core, up to a
+/// tick (4 ms here) in the middle of a step. Called from a worker of the pool, the spawned job waits
+/// in the caller's own queue, and at the scope's end the caller takes it back and runs it (finding
+/// nothing left to do) unless a helper has taken it already. Nothing else changes: each piece of work
+/// still runs once, and its result does not depend on which thread ran it.
+pub fn worker_pool(name: &str) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
+    let name = name.to_string();
+    rayon::ThreadPoolBuilder::new().use_current_thread().thread_name(move |i| format!("{name}-{i}")).build()
+}
+
 /// Spins until `done` is set or [`SPIN`] has passed (the scope's end then blocks as usual).
 fn spin_until(done: &AtomicBool) {
     let start = Instant::now();
@@ -104,6 +124,52 @@ fn spin_until(done: &AtomicBool) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A worker of its own pool whose helpers are all busy is not held up: the scope's job comes back
+    /// to the caller, which runs it itself, and every piece runs once. (Were the caller not thread 0
+    /// of the pool, the first assertion fails.)
+    #[test]
+    fn a_worker_does_not_wait_for_busy_helpers() {
+        let result = std::thread::spawn(|| {
+            let pool = worker_pool("test").expect("pool");
+            assert_eq!(rayon::current_thread_index(), Some(0), "the caller is the pool's thread 0");
+            let helpers = pool.current_num_threads() - 1;
+            if helpers == 0 {
+                return None; // one core: no helper to be busy
+            }
+            // Every helper busy until the pieces are done (or 3 s have passed).
+            let (release, busy) =
+                (std::sync::Arc::new(AtomicBool::new(false)), std::sync::Arc::new(AtomicUsize::new(0)));
+            for _ in 0..helpers {
+                let (release, busy) = (release.clone(), busy.clone());
+                pool.spawn(move || {
+                    busy.fetch_add(1, Ordering::SeqCst);
+                    let t = Instant::now();
+                    while !release.load(Ordering::SeqCst) && t.elapsed() < Duration::from_secs(3) {
+                        std::thread::sleep(Duration::from_millis(1));
+                    }
+                });
+            }
+            let t = Instant::now();
+            while busy.load(Ordering::SeqCst) < helpers {
+                if t.elapsed() > Duration::from_secs(2) {
+                    return None; // the helpers were not scheduled: nothing to measure
+                }
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            let runs: Vec<AtomicUsize> = (0..9).map(|_| AtomicUsize::new(0)).collect();
+            let t = Instant::now();
+            in_turns(runs.len(), |k| {
+                runs[k].fetch_add(1, Ordering::SeqCst);
+            });
+            let took = t.elapsed();
+            release.store(true, Ordering::SeqCst);
+            Some((took, runs.iter().all(|r| r.load(Ordering::SeqCst) == 1)))
+        });
+        let Some((took, once)) = result.join().expect("thread") else { return };
+        assert!(once, "every piece runs once");
+        assert!(took < Duration::from_secs(1), "the caller waited {took:?} for a busy helper");
+    }
 
     /// Every piece runs once, whichever thread takes it, with a pool of two threads and of one.
     #[test]

@@ -291,6 +291,16 @@ impl SimThread {
         let (say, events) = crossbeam_channel::unbounded();
         let (told, scheduled) = crossbeam_channel::bounded(1);
         let handle = std::thread::Builder::new().name("dissect-sim".into()).spawn(move || {
+            // The thread is a worker of a pool of its own, so that a step that shares its work with a
+            // helper thread (a large region's tear scan, a whole-body sweep) never waits for a helper
+            // the scheduler has not yet given a core (`chainmail::worker_pool`). Made before the thread
+            // asks for real-time scheduling: the helpers keep normal priority. Without it (a failure
+            // to start threads) the steps use rayon's global pool, as before.
+            let _pool = crate::chainmail::worker_pool("dissect-sim")
+                .map_err(|e| {
+                    log::warn!("simulation thread: no pool of its own ({e}); using rayon's global pool")
+                })
+                .ok();
             let (scheduler, outcome) = Scheduler::acquire();
             let _ = told.send(outcome);
             run(episode, &inputs, &say, publisher, scheduler)
