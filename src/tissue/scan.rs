@@ -174,9 +174,13 @@ impl Tissue {
 
 /// Regions of fewer elements are scanned on one thread: a second thread costs more to start than it
 /// saves. The scan takes about 16 ns an element (the careful exercise's final lift at 256 x 192 on
-/// the AVX2 machine: 600 us over 38 000), so a region this size takes about 130 us, and its second
-/// half twice what handing it to the pool costs there (tens of microseconds).
-pub(crate) const SPLIT_MIN: usize = 1 << 13;
+/// the AVX2 machine: 600 us over 38 000). It was 8 192 while the stepping thread could be held up by
+/// a helper without a core (`chainmail::worker_pool`); at 2 048, measured 2026-11-28 on the Intel
+/// machine (AVX2, the stepping thread a worker of its own pool, alternating pairs), the contact and
+/// limits phase of the careful exercise's lifts at 128 x 96 fell from 175-200 us to 112-142 us a step
+/// (five pairs; step p99 747-840 -> 676-734 us) and of its first lift at 256 x 192 from 179-238 to
+/// 136-167 us (four pairs; mean step 220-253 -> 175-241 us).
+pub(crate) const SPLIT_MIN: usize = 1 << 11;
 
 /// Most pieces a split scan's region is cut into: enough that the two threads finish within a small
 /// piece of each other.
