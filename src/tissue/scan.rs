@@ -179,8 +179,15 @@ impl Tissue {
 /// machine (AVX2, the stepping thread a worker of its own pool, alternating pairs), the contact and
 /// limits phase of the careful exercise's lifts at 128 x 96 fell from 175-200 us to 112-142 us a step
 /// (five pairs; step p99 747-840 -> 676-734 us) and of its first lift at 256 x 192 from 179-238 to
-/// 136-167 us (four pairs; mean step 220-253 -> 175-241 us).
+/// 136-167 us (four pairs; mean step 220-253 -> 175-241 us), with pieces of 512 elements; the pieces
+/// are [`PIECE`] long again since.
 pub(crate) const SPLIT_MIN: usize = 1 << 11;
+
+/// Elements in a piece of a split scan (and at least two pieces). Pieces of 512 cost the careful
+/// exercise's final lift at 256 x 192 more: its contact and limits phase over the first lift's mean
+/// step, 0.46 to 0.54 with pieces of 512 and 0.38 to 0.52 with these (four alternating pairs on the
+/// Intel machine, 2026-11-28).
+const PIECE: usize = 1 << 11;
 
 /// Most pieces a split scan's region is cut into: enough that the two threads finish within a small
 /// piece of each other.
@@ -213,8 +220,8 @@ impl Clone for ScanSpare {
 impl Tissue {
     /// [`Tissue::scan_flat`] over the whole region: on two threads at once when the region has at
     /// least `split_min` elements (the step's scan: [`SPLIT_MIN`]; tests split small regions) and
-    /// rayon's pool has a thread to spare. The region is then cut into pieces of about a quarter of
-    /// `split_min` (at most [`PIECES`]), which the two threads take in turn (`spare` holds each
+    /// rayon's pool has a thread to spare. The region is then cut into pieces of about [`PIECE`]
+    /// elements, or `split_min` if fewer (at least two, at most [`PIECES`]), which the two threads take in turn (`spare` holds each
     /// piece's findings), so that both finish together however the pieces cost. The pieces' findings
     /// are joined in the region's order: the same tears in the same order, elements kept and box
     /// findings, and the same largest stretch and drift to the bit (maxima, in whatever order they
@@ -235,7 +242,7 @@ impl Tissue {
         if region.len() < split_min.max(2) || rayon::current_num_threads() < 2 {
             return self.scan_flat_simd::<BOXES>(region, ratio2, hits, boxes, wide, out);
         }
-        let len = (split_min / 4).max(1);
+        let len = PIECE.min(split_min).max(1);
         let pieces = region.len().div_ceil(len).clamp(2, PIECES);
         let len = region.len().div_ceil(pieces);
         if spare.pieces.len() < pieces {
