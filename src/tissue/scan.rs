@@ -221,8 +221,9 @@ impl Tissue {
     /// [`Tissue::scan_flat`] over the whole region: on two threads at once when the region has at
     /// least `split_min` elements (the step's scan: [`SPLIT_MIN`]; tests split small regions) and
     /// rayon's pool has a thread to spare. The region is then cut into pieces of about [`PIECE`]
-    /// elements, or `split_min` if fewer (at least two, at most [`PIECES`]), which the two threads take in turn (`spare` holds each
-    /// piece's findings), so that both finish together however the pieces cost. The pieces' findings
+    /// elements, or `split_min` if fewer (at least two, at most [`PIECES`]), which the two threads
+    /// take in turn (`spare` holds each piece's findings), so that both finish together however the
+    /// pieces cost. The pieces' findings
     /// are joined in the region's order: the same tears in the same order, elements kept and box
     /// findings, and the same largest stretch and drift to the bit (maxima, in whatever order they
     /// are taken; a piece that starts from a lower largest stretch only sends more links to the
