@@ -173,14 +173,10 @@ impl Tissue {
 }
 
 /// Regions of fewer elements are scanned on one thread: a second thread costs more to start than it
-/// saves. The scan takes about 16 ns an element (the careful exercise's final lift at 256 x 192 on
-/// the AVX2 machine: 600 us over 38 000). It was 8 192 while the stepping thread could be held up by
-/// a helper without a core (`chainmail::worker_pool`); at 2 048, measured 2026-11-28 on the Intel
-/// machine (AVX2, the stepping thread a worker of its own pool, alternating pairs), the contact and
-/// limits phase of the careful exercise's lifts at 128 x 96 fell from 175-200 us to 112-142 us a step
-/// (five pairs; step p99 747-840 -> 676-734 us) and of its first lift at 256 x 192 from 179-238 to
-/// 136-167 us (four pairs; mean step 220-253 -> 175-241 us), with pieces of 512 elements; the pieces
-/// are [`PIECE`] long again since.
+/// saves. (It was 8 192 while the stepping thread could be held up by a helper without a core; see
+/// `chainmail::worker_pool`. At 2 048, on the Intel machine with AVX2, 2026-11-28, alternating pairs:
+/// the careful exercise's contact and limits phase fell from 175-200 to 112-142 us a step in its
+/// final lift at 128 x 96, and from 179-238 to 136-167 us in its first lift at 256 x 192.)
 pub(crate) const SPLIT_MIN: usize = 1 << 11;
 
 /// Elements in a piece of a split scan (and at least two pieces). Pieces of 512 cost the careful
@@ -223,11 +219,10 @@ impl Tissue {
     /// rayon's pool has a thread to spare. The region is then cut into pieces of about [`PIECE`]
     /// elements, or `split_min` if fewer (at least two, at most [`PIECES`]), which the two threads
     /// take in turn (`spare` holds each piece's findings), so that both finish together however the
-    /// pieces cost. The pieces' findings
-    /// are joined in the region's order: the same tears in the same order, elements kept and box
-    /// findings, and the same largest stretch and drift to the bit (maxima, in whatever order they
-    /// are taken; a piece that starts from a lower largest stretch only sends more links to the
-    /// division).
+    /// pieces cost. The pieces' findings are joined in the region's order: the same tears in the same
+    /// order, elements kept and box findings, and the same largest stretch and drift to the bit
+    /// (maxima, in whatever order they are taken; a piece that starts from a lower largest stretch
+    /// only sends more links to the division).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn scan_flat_split<const BOXES: bool>(
         &self,
