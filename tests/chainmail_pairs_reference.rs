@@ -190,11 +190,12 @@ fn a_pinned_point_lift_completes_alike() {
     }
 }
 
-/// A lift raised a block at a time (`Workspace::set_rigid_blocks`, as a tissue's workspace does)
-/// against the same lift taken element by element: a jaw-sized patch of a two-layer plane, its border
-/// pinned, rising step after step. The blocks must engage, every link must stay within its box, and
-/// the heights must agree to rounding (the raise adds the seeds' rise where the completion adds each
-/// bound to its neighbour's height). Both completions with blocks, fast and plain, agree bit for bit.
+/// A lift that raises its rigid elements at once (`Workspace::set_rigid_blocks`, as a tissue's
+/// workspace does) against the same lift taken element by element: a jaw-sized patch of a two-layer
+/// plane, its border pinned, rising step after step. The raise must engage, every link must stay
+/// within its box, and the heights must agree to rounding (the raise adds the seeds' rise where the
+/// completion adds each bound to its neighbour's height). Both completions with the raise, fast and
+/// plain, agree bit for bit.
 #[test]
 fn rigid_blocks_lift_as_the_elements_do() {
     let n = 64;
@@ -232,6 +233,6 @@ fn rigid_blocks_lift_as_the_elements_do() {
         }
     }
     // The patch rose 4.5 mm (further, the pins stop it); its tent spans most of the sheet.
-    assert!(raised > 5_000, "the blocks raised only {raised} elements in all");
+    assert!(raised > 5_000, "the raise lifted only {raised} elements in all");
     assert!(worst <= 2e-7, "the heights differ by up to {worst} m");
 }

@@ -39,7 +39,7 @@ pub struct Workspace {
     /// The completion takes its plain path whatever the widths (for the tests that compare the two).
     pub(crate) plain_pairs: bool,
 
-    /// A lift's rigid blocks (`reaction/lift.rs`).
+    /// A lift's rigid elements (`reaction/lift.rs`).
     pub(crate) lift: super::reaction::Lift,
 
     /// Relaxation's second buffer.
@@ -97,13 +97,13 @@ impl Workspace {
         self.plain_pairs = plain;
     }
 
-    /// Lets the normal passes of lifts raise rigid blocks (`reaction/lift.rs`): `true` in a tissue's
+    /// Lets the normal passes of lifts raise rigid elements at once (`reaction/lift.rs`): `true` in a tissue's
     /// workspace; `false` (every element taken one by one) by default.
     pub fn set_rigid_blocks(&mut self, on: bool) {
         self.lift.enabled = on;
     }
 
-    /// Elements the last deformation raised as part of a rigid block and not otherwise: moved, but not
+    /// Elements the last deformation raised as rigid elements and not otherwise: moved, but not
     /// in [`Workspace::moved`].
     pub fn raised_unlisted(&self) -> usize {
         self.lift.unlisted_count
@@ -116,20 +116,20 @@ impl Workspace {
     }
 
     /// The sponsor of an element moved by the last deformation (the source is its own sponsor; none for
-    /// an element only raised with a rigid block).
+    /// an element only raised as a rigid element).
     pub fn sponsor(&self, e: ElementId) -> Option<ElementId> {
         let i = e.index();
         (self.stamp.get(i) == Some(&self.generation) && self.generation != 0 && !self.raised_only(i))
             .then(|| ElementId(self.sponsor[i]))
     }
 
-    /// Whether element `i` was raised with a rigid block and not moved otherwise (it has no sponsor of
+    /// Whether element `i` was raised as a rigid element and not moved otherwise (it has no sponsor of
     /// its own).
     fn raised_only(&self, i: usize) -> bool {
         super::reaction::has_bit(&self.lift.unlisted, i)
     }
 
-    /// An element's position before the last deformation, if it moved (with a rigid block too).
+    /// An element's position before the last deformation, if it moved (raised as a rigid element too).
     pub fn old_position(&self, e: ElementId) -> Option<[f32; 3]> {
         let i = e.index();
         (self.stamp.get(i) == Some(&self.generation) && self.generation != 0).then(|| self.old[i])

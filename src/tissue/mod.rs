@@ -530,7 +530,7 @@ impl Tissue {
 
     /// Notes the elements the last chain reaction moved (for the limits' repair, in the reaction's
     /// order) and marks them to join the disturbed region with their neighbours. Elements a lift
-    /// raised with a rigid block (`chainmail/reaction/lift.rs`) moved as a body and are not among them:
+    /// raised as rigid elements (`chainmail/reaction/lift.rs`) moved as a body and are not among them:
     /// the region keeps the rising tent's rim, not its taut inside, which nothing strains.
     fn activate_moved(&mut self) {
         self.step_moved += self.ws.moved.len() + self.ws.raised_unlisted();

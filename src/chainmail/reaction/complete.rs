@@ -242,7 +242,7 @@ impl Body {
             class_z.resize(len, [f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY]);
             ws.class_z_key = key;
         }
-        // A lift's rigid blocks rise at once; their rim is checked with what the lists moved.
+        // A lift's rigid elements rise at once; their rim is checked with what the lists moved.
         self.raise_rigid(ws, seeds, &class_z);
         let mut bits = std::mem::take(&mut ws.pair_bits);
         bits.clear();
@@ -506,7 +506,7 @@ fn meet(m: &mut Moves<'_>, flags: &[u8], Bound { x, y, lo, hi }: Bound) -> Met {
     } else if let Some(w) = m.unlisted.0.get_mut(f / 64)
         && *w & (1 << (f % 64)) != 0
     {
-        // Raised with a rigid block, and now moved on its own: listed as moved from where it was.
+        // Raised as a rigid element, and now moved on its own: listed as moved from where it was.
         *w &= !(1 << (f % 64));
         *m.unlisted.1 -= 1;
         m.sponsor[f] = leader as u32;
