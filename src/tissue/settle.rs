@@ -120,14 +120,19 @@ impl Tissue {
                     bits[w] |= x;
                     return;
                 }
-                let mut y = x;
+                // Only elements within both arrays: all of the word's but past the end.
+                let y = if first + 64 <= within {
+                    x
+                } else if first < within {
+                    x & ((1u64 << (within - first)) - 1)
+                } else {
+                    0
+                };
+                bits[w] |= y;
+                let mut y = y;
                 while y != 0 {
-                    let e = first + y.trailing_zeros() as usize;
+                    last_move[first + y.trailing_zeros() as usize] = f32::INFINITY;
                     y &= y - 1;
-                    if e < within {
-                        last_move[e] = f32::INFINITY;
-                        bits[w] |= 1 << (e % 64);
-                    }
                 }
             });
         }

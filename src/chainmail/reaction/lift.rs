@@ -208,7 +208,8 @@ impl Body {
             }
             let first = w * 64;
             let row = &flags[first..(first + 64).min(n)];
-            if row.iter().any(|&f| f & FIXED != 0) {
+            // (A fold, not `any`: without an early exit the test runs on vectors.)
+            if row.iter().fold(0, |a, &f| a | f) & FIXED != 0 {
                 for (b, &f) in row.iter().enumerate() {
                     if f & FIXED != 0 {
                         *x &= !(1 << b);
@@ -236,8 +237,10 @@ impl Body {
             let first = w * 64;
             let stamps = &stamp[first..(first + 64).min(n)];
             let mut moved = 0u64;
-            for (b, &s) in stamps.iter().enumerate() {
-                moved |= u64::from(s == g) << b;
+            if stamps.iter().fold(false, |a, &s| a | (s == g)) {
+                for (b, &s) in stamps.iter().enumerate() {
+                    moved |= u64::from(s == g) << b;
+                }
             }
             let (mut y, up) = (x & !moved, x & !moved);
             while y != 0 {
