@@ -63,6 +63,26 @@ impl Grid {
         self.len().div_ceil(64)
     }
 
+    /// The element `e`'s partner in the other layer (of two), its place there: a fibre, if any, joins
+    /// the two.
+    fn partner(&self, e: usize) -> usize {
+        let layer = self.nx * self.ny;
+        if e < layer { e + layer } else { e - layer }
+    }
+
+    /// Of word `w` of `set` (a bit per element), the elements whose eight neighbours on their layer's
+    /// grid (along the rows, across them and diagonally: the links and the normal pairs) are in `set`
+    /// too, reading a neighbour past a row's end or a layer's as the element at that offset (a grid's
+    /// edge elements are for the caller to take out).
+    fn surrounded(&self, set: &[u64], w: usize) -> u64 {
+        let (nx, at) = (self.nx as isize, (w * 64) as isize);
+        let mut x = set.get(w).copied().unwrap_or(0);
+        for o in [1, -1, nx, -nx, nx + 1, nx - 1, -nx + 1, -nx - 1] {
+            x &= word_at(set, at + o);
+        }
+        x
+    }
+
     /// The bits of the elements on a layer's edge (first or last of a row or a column).
     fn edges(&self) -> Vec<u64> {
         let mut bits = vec![0; self.words()];
@@ -110,9 +130,7 @@ pub(crate) struct Lift {
     rigid: Vec<u64>,
     /// The elements this reaction raised, in element order.
     pub(crate) raised: Vec<u32>,
-    /// A bit per element raised by this reaction, and a bit per raised element the completion has
-    /// not moved again (not in the moved list).
-    pub(crate) raised_bits: Vec<u64>,
+    /// A bit per raised element the completion has not moved again (not in the moved list).
     pub(crate) unlisted: Vec<u64>,
     /// How many raised elements are not in the moved list.
     pub(crate) unlisted_count: usize,
@@ -137,7 +155,6 @@ impl Lift {
     pub(crate) fn clear_reaction(&mut self) {
         if !self.raised.is_empty() {
             self.raised.clear();
-            self.raised_bits.fill(0);
             self.unlisted.fill(0);
         }
         self.unlisted_count = 0;
@@ -221,8 +238,7 @@ impl Body {
         if !any {
             return;
         }
-        if lift.raised_bits.len() != words {
-            lift.raised_bits = vec![0; words];
+        if lift.unlisted.len() != words {
             lift.unlisted = vec![0; words];
         }
         let g = ws.generation;
@@ -255,7 +271,6 @@ impl Body {
                 }
                 lift.raised.extend(r.start as u32..r.end as u32);
             }
-            lift.raised_bits[w] |= up;
             lift.unlisted[w] |= up;
         }
         lift.unlisted_count = lift.raised.len();
@@ -276,8 +291,7 @@ impl Body {
             lift.fibre_bits = vec![0; words];
             lift.fibre_key = vec![(0, 0); words];
         }
-        let (nx, il) = (grid.nx as isize, layer as isize);
-        let offsets = [1, -1, nx, -nx, nx + 1, nx - 1, -nx + 1, -nx - 1];
+        let il = layer as isize;
         let rigid = &lift.rigid[..];
         for (w, &x) in rigid.iter().enumerate() {
             if x == 0 {
@@ -285,10 +299,7 @@ impl Body {
             }
             let first = w * 64;
             let base = first as isize;
-            let mut inner = x & !lift.edges[w];
-            for o in offsets {
-                inner &= word_at(rigid, base + o);
-            }
+            let inner = grid.surrounded(rigid, w) & !lift.edges[w];
             let mut out = x & !inner;
             while out != 0 {
                 let b = out.trailing_zeros() as usize;
@@ -315,7 +326,7 @@ impl Body {
             if lift.fibre_key[w] != key {
                 let mut bound = 0u64;
                 for e in first..(first + 64).min(n) {
-                    let p = if e < layer { e + layer } else { e - layer };
+                    let p = grid.partner(e);
                     let slots = e * w_slots..e * w_slots + w_slots;
                     let t = slot_nbr[slots.clone()].iter().position(|&y| y as usize == p);
                     lift.fibre_z[e] = match t {
@@ -338,9 +349,8 @@ impl Body {
                 let b = lonely.trailing_zeros() as usize;
                 lonely &= lonely - 1;
                 let e = first + b;
-                let p = if e < layer { e + layer } else { e - layer };
                 let [lo, hi] = lift.fibre_z[e];
-                let d = pos[e][2] - pos[p][2];
+                let d = pos[e][2] - pos[grid.partner(e)][2];
                 if d > hi || d < lo {
                     lift.rim.push(e as u32);
                 }
@@ -402,15 +412,11 @@ impl Body {
                 }
             }
             // Only those whose eight neighbours rose with them too (see above).
-            let nx = grid.nx as isize;
             rose_all.clear();
             rose_all.extend_from_slice(&memo.rose);
             for (w, x) in memo.rose.iter_mut().enumerate() {
-                if *x == 0 {
-                    continue;
-                }
-                for o in [1, -1, nx, -nx, nx + 1, nx - 1, -nx + 1, -nx - 1] {
-                    *x &= word_at(rose_all, (w * 64) as isize + o);
+                if *x != 0 {
+                    *x = grid.surrounded(rose_all, w);
                 }
             }
         }
