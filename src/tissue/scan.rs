@@ -153,14 +153,18 @@ impl Tissue {
                 let d = [q[0] - p[0], q[2] - p[2], q[1] - p[1]];
                 let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
                 let ratio = ratio2.get(k.material as usize).copied().unwrap_or(f32::INFINITY);
-                let near = near_bar(d2, k.rest2, ratio, k.link & LAYER != 0, max_stretch2);
-                let outside = BOXES && wide.get(k.class as usize).is_some_and(|&w| limits::beyond(p, q, w));
-                if near || outside {
-                    let moved_y = BOXES && outside && (moved_e || moved(k.nbr as usize));
-                    out.outside |= moved_y;
-                    if near {
-                        scan_link(k, d2, ratio, &mut max_stretch2, hits);
-                    }
+                if near_bar(d2, k.rest2, ratio, k.link & LAYER != 0, max_stretch2) {
+                    scan_link(k, d2, ratio, &mut max_stretch2, hits);
+                }
+                // Only a link with an end the step moved counts outside its box, and most links have
+                // none: the box is tested only for those (a stamp read, where the box takes a dozen
+                // reads and comparisons).
+                if BOXES
+                    && !out.outside
+                    && (moved_e || moved(k.nbr as usize))
+                    && wide.get(k.class as usize).is_some_and(|&w| limits::beyond(p, q, w))
+                {
+                    out.outside = true;
                 }
             }
             if keep && let Some(k) = out.keep.as_deref_mut() {
