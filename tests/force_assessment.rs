@@ -50,3 +50,39 @@ fn careful_hands_use_far_less_force_than_careless_ones() {
     assert!(careful.total.peak_n < 0.5 * careless.total.peak_n, "{careful:?}\n{careless:?}");
     assert_eq!(careful.instruments.len(), 3);
 }
+
+/// Forceps held still on a lifted dura: the force is read again while nothing moves (the same
+/// figure every step, the sum over the held elements' links as they lie), and is measured afresh
+/// the step the tissue changes (a stiffer material is felt at once).
+#[test]
+fn a_still_grasp_feels_the_tissue_as_it_is() {
+    let scene = scene();
+    let mut world = scene.build_world(false).unwrap_or_else(|e| panic!("{e}"));
+    world.push(Command::Select(InstrumentKind::Forceps));
+    world.push(Command::MoveTo(world.tissue().surface_point(0.5, 0.5, 0.003)));
+    world.push(Command::Grasp);
+    world.push(Command::MoveTo(world.tissue().surface_point(0.5, 0.5, 0.005)));
+    for _ in 0..400 {
+        world.step();
+    }
+    let held: Vec<_> = world.tissue().held().collect();
+    assert!(held.len() > 1, "the jaws hold {} elements", held.len());
+    let pull = world.tissue().force_on(&held);
+    let f = world.forces().forceps;
+    assert!(Forces::magnitude(f) > 1e-3, "{f:?}: nothing felt");
+    world.step();
+    assert_eq!(world.forces().forceps, f, "a still step felt another force");
+    assert_eq!(world.tissue().force_on(&held), pull, "the tissue moved");
+    // Every material twice as stiff (Young's modulus): the same shape pulls twice as hard.
+    let materials = world.tissue().body().materials().to_vec();
+    for (k, m) in materials.into_iter().enumerate() {
+        let id = dissect::chainmail::MaterialId(k as u16);
+        world.push(Command::SetMaterial(
+            id,
+            dissect::chainmail::Material { young_modulus: 2.0 * m.young_modulus, ..m },
+        ));
+    }
+    world.step();
+    let stiffer = world.forces().forceps;
+    assert!(Forces::magnitude(stiffer) > 1.5 * Forces::magnitude(f), "{stiffer:?} against {f:?}");
+}

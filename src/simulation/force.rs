@@ -74,6 +74,11 @@ pub(crate) struct ForceGauge {
     sorted: Vec<crate::chainmail::ElementId>,
     /// The tissue's stiffness at the grasped patch, N/m, and the element it was measured around.
     patch: Option<(crate::chainmail::ElementId, f32)>,
+    /// The force on the held elements last measured, with the body's motion count and revision then
+    /// and the elements held (`memo_held`): a step that moved, cut and tore nothing and holds the same
+    /// elements reads it again rather than summing every held element's links.
+    memo: Option<(u64, u64, [f32; 3])>,
+    memo_held: Vec<crate::chainmail::ElementId>,
 }
 
 impl ForceGauge {
@@ -92,7 +97,20 @@ impl ForceGauge {
             if self.held.is_empty() {
                 self.held.push(e);
             }
-            let f = tissue.force_on_many(&self.held, &mut self.sorted);
+            let key = (tissue.body().motion(), tissue.body().revision());
+            let f = match self.memo {
+                Some((motion, revision, f))
+                    if (motion, revision) == key && self.memo_held == self.held && !tissue.is_fem() =>
+                {
+                    f
+                }
+                _ => {
+                    let f = tissue.force_on_many(&self.held, &mut self.sorted);
+                    self.memo = Some((key.0, key.1, f));
+                    self.memo_held.clone_from(&self.held);
+                    f
+                }
+            };
             // Only while the forceps are in hand: a clamp left on the tissue stays where it is.
             let short = if inst.kind == InstrumentKind::Forceps {
                 [0, 1, 2].map(|k| inst.target[k] - inst.tip[k])
