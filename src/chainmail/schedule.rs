@@ -4,7 +4,7 @@
 //! bands (`relax/bands.rs`) and the tissue's tear scan (`tissue/scan.rs`) call it.
 
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
 use std::time::Duration;
 
 use web_time::Instant;
@@ -83,11 +83,41 @@ where
             run();
             done.store(true, Ordering::SeqCst);
         });
+        // A pool thread woken ahead (`wake_ahead`) stops waiting and takes the job just spawned.
+        TURNS.fetch_add(1, Ordering::Release);
         run();
         // The pool thread, if it has started, may hold a piece (it took it before the caller found
         // none left: the counter orders both).
         if started.load(Ordering::SeqCst) {
             spin_until(&done);
+        }
+    });
+}
+
+/// How many times [`in_turns`] has handed work to the pool: what a thread woken ahead waits for.
+static TURNS: AtomicU64 = AtomicU64::new(0);
+
+/// Longest a thread woken ahead waits for [`in_turns`] before it goes back to the pool.
+const AHEAD: Duration = Duration::from_micros(300);
+
+/// Wakes one pool thread ahead of an [`in_turns`] that the caller is about to run (the tear scan of
+/// a large region, after contact): the woken thread spins until that call hands out its pieces (or
+/// [`AHEAD`] has passed), then takes them with the caller. A pool thread asleep when the work is
+/// handed out takes tens of microseconds to wake on this project's virtual machines, and in the
+/// careful exercise's lifts the caller had then taken most of the pieces itself: 17 of 589 went to
+/// the pool thread (200 split scans at 256 x 192, 2026-11-28, the machine busy with a build). Does
+/// nothing on one thread. Runs nothing of the caller's: results do not change.
+pub(crate) fn wake_ahead() {
+    if rayon::current_num_threads() < 2 {
+        return;
+    }
+    let seen = TURNS.load(Ordering::Acquire);
+    rayon::spawn(move || {
+        let start = Instant::now();
+        while TURNS.load(Ordering::Acquire) == seen && start.elapsed() < AHEAD {
+            for _ in 0..64 {
+                std::hint::spin_loop();
+            }
         }
     });
 }
@@ -169,6 +199,31 @@ mod tests {
         let Some((took, once)) = result.join().expect("thread") else { return };
         assert!(once, "every piece runs once");
         assert!(took < Duration::from_secs(1), "the caller waited {took:?} for a busy helper");
+    }
+
+    /// A thread woken ahead takes its share of the pieces, each once; woken for work that never
+    /// comes, it goes back to the pool within `AHEAD`, and the pool's next work runs as usual.
+    #[test]
+    fn a_thread_woken_ahead_takes_pieces_or_goes_back() {
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+            pool.install(|| {
+                wake_ahead();
+                std::thread::sleep(Duration::from_micros(100));
+                let runs: Vec<AtomicUsize> = (0..37).map(|_| AtomicUsize::new(0)).collect();
+                in_turns(runs.len(), |k| {
+                    runs[k].fetch_add(1, Ordering::SeqCst);
+                });
+                assert!(runs.iter().all(|r| r.load(Ordering::SeqCst) == 1), "{threads} threads");
+                // Woken for nothing: the pool thread is free again after `AHEAD`.
+                wake_ahead();
+                std::thread::sleep(AHEAD + Duration::from_millis(5));
+                let t = Instant::now();
+                let (a, b) = rayon::join(|| 1, || 2);
+                assert_eq!((a, b), (1, 2));
+                assert!(t.elapsed() < Duration::from_secs(1), "{threads} threads: {:?}", t.elapsed());
+            });
+        }
     }
 
     /// Every piece runs once, whichever thread takes it, with a pool of two threads and of one.
