@@ -27,14 +27,8 @@ pub const REGION_UPDATES: usize = 1 << 13;
 /// Fewest element updates one step's relaxation makes: a step whose chain reactions moved many
 /// elements (a lift raising the whole tent) has done much of its work already, so its relaxation gets
 /// [`REGION_UPDATES`] less what they moved, but never less than this; the region keeps relaxing over
-/// the next, quieter steps. (It was a quarter of [`REGION_UPDATES`] until 2026-11-28. With an eighth,
-/// the careful meninges exercise at 256 x 192 on the Intel machine with AVX2, two alternating pairs of
-/// `exercise_trace`: the final lift's steps 1440-1466 took 832-837 us against 898-922, the whole run's
-/// p99 830-844 us against 920-935. The scores, tears and completion are the same at 64 x 48 to
-/// 512 x 384. The final state's heights are within 0.1 mm, and the lifted dura stays round: its heights
-/// 2, 4 and 6 mm from the forceps in 8 directions spread by at most 2.7 % during the final lift, against
-/// 2.3 % before.)
-pub const REGION_UPDATES_LEAST: usize = REGION_UPDATES / 8;
+/// the next, quieter steps.
+pub const REGION_UPDATES_LEAST: usize = REGION_UPDATES / 4;
 
 impl Tissue {
     /// Damped Gauss-Seidel sweeps over the disturbed region within `budget` and [`REGION_UPDATES`]
