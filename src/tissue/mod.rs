@@ -707,12 +707,7 @@ impl Tissue {
     /// cross. Returns how many pairs were corrected.
     pub fn enforce_contact(&mut self) -> u32 {
         self.take_moved();
-        // The tear scan after contact splits a region this large over two threads: one is woken now,
-        // so that it is awake when the scan hands out its pieces.
-        let flat = matches!(self.geometry, Geometry::Surface(s) if s.is_flat());
-        if flat && !self.is_fem() && self.active.len() >= scan::SPLIT_MIN {
-            crate::chainmail::schedule::wake_ahead();
-        }
+        self.wake_scan_helper();
         if self.layers.len() != 2 || !matches!(self.geometry, Geometry::Surface(_)) {
             return 0;
         }

@@ -6,8 +6,8 @@
 //! four link- or slot-indexed arrays. [`Tissue::scan_region`] is the plain path;
 //! in debug builds every scan compares the two.
 
-use super::{BoxCheck, LinkKind, ScanFound, Tissue, limits, near_bar, settle, tear_divide};
-use crate::chainmail::schedule::in_turns;
+use super::{BoxCheck, Geometry, LinkKind, ScanFound, Tissue, limits, near_bar, settle, tear_divide};
+use crate::chainmail::schedule::{in_turns, wake_ahead};
 use crate::chainmail::{Body, ElementId, INTACT, LinkId, SIDE_B_BIT};
 
 /// Set in [`ScanLink::link`] for a link within a layer (whose stretch the scan reports).
@@ -193,6 +193,12 @@ const PIECE: usize = 1 << 11;
 /// piece of each other.
 const PIECES: usize = 32;
 
+/// Whether a scan of `len` elements is split over two threads (from `split_min` elements, when rayon's
+/// pool has a thread to spare).
+fn splits(len: usize, split_min: usize) -> bool {
+    len >= split_min.max(2) && rayon::current_num_threads() >= 2
+}
+
 /// One piece's findings of a tear scan split over two threads.
 #[derive(Clone, Debug, Default)]
 struct Piece {
@@ -239,7 +245,7 @@ impl Tissue {
         split_min: usize,
     ) -> f32 {
         let region = &self.active[..];
-        if region.len() < split_min.max(2) || rayon::current_num_threads() < 2 {
+        if !splits(region.len(), split_min) {
             return self.scan_flat_simd::<BOXES>(region, ratio2, hits, boxes, wide, out);
         }
         let len = PIECE.min(split_min).max(1);
@@ -279,6 +285,17 @@ impl Tissue {
             max_stretch2 = max_stretch2.max(piece.max_stretch2);
         }
         max_stretch2
+    }
+
+    /// Wakes a pool thread ahead of the step's tear scan if that scan will be split over two threads
+    /// (a flat surface's region of [`SPLIT_MIN`] elements or more), so that the thread is awake when
+    /// the scan hands out its pieces (see `chainmail::schedule::wake_ahead`). Contact calls it, just
+    /// before the scan.
+    pub(super) fn wake_scan_helper(&self) {
+        let flat = matches!(self.geometry, Geometry::Surface(s) if s.is_flat());
+        if flat && !self.is_fem() && splits(self.active.len(), SPLIT_MIN) {
+            wake_ahead();
+        }
     }
 
     /// [`Tissue::scan_flat`] compiled for the widest vectors the workspace's level and the machine
