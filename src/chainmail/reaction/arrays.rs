@@ -115,6 +115,35 @@ pub(super) struct Run {
     /// The list's slot and its grid offset.
     pub(super) t: usize,
     pub(super) o: isize,
+    /// The slots a run's moves push across rows ([`onward`]), one bit each.
+    pub(super) onward: u64,
+}
+
+/// The slots across rows, away from the sponsors, that the candidates of a run through a slot of
+/// grid offset `o` push to, one bit each: every slot whose offset is neither back to the sponsors
+/// (`-o`) nor along the row (±1). `None` if a slot lies past the mask's 64 bits (no grid has so many).
+pub(super) fn onward(offs: &[isize], o: isize) -> Option<u64> {
+    if offs.len() > 64 {
+        return None;
+    }
+    Some(
+        offs.iter()
+            .enumerate()
+            .filter(|&(_, &ou)| ou != -o && ou.unsigned_abs() != 1)
+            .fold(0, |m, (u, _)| m | 1 << u),
+    )
+}
+
+/// The slots set in `mask`, lowest first.
+#[inline(always)]
+pub(super) fn slots(mut mask: u64) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let u = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            u
+        })
+    })
 }
 
 /// One chunk of a run: its list entries from index `entry` of the candidate lists (the list ending
@@ -225,6 +254,7 @@ pub(super) fn bad_bytes(b: Slices<'_>, s: usize, c: usize) -> Option<u128> {
 /// The pushes along the row of a run of moved candidates from `first` to `last` (both ends
 /// included, either way along the row): only its two ends can have a neighbour there outside the
 /// run (and back toward the sponsors every neighbour has moved).
+#[inline(always)]
 pub(super) fn push_ends(b: Slices<'_>, [first, last]: [usize; 2], m: &mut Moving<'_>) {
     for u in 0..b.width {
         if b.offs[u].unsigned_abs() == 1 {

@@ -405,11 +405,14 @@ impl Body {
                 // Lists across rows (y and z on grids) hold runs of consecutive sponsors (up or down
                 // a row) whose candidates are consecutive too and independent of each other: such a
                 // run is moved as one (see `runs.rs`), with the same moves, order and sponsors.
-                let across = offs.get(t).filter(|o| o.unsigned_abs() > 1).copied();
+                let across = offs
+                    .get(t)
+                    .filter(|o| o.unsigned_abs() > 1)
+                    .and_then(|&o| Some((o, arrays::onward(offs, o)?)));
                 while head[t] < m.tail[t] {
                     progressed = true;
-                    if let Some(o) = across {
-                        let run = Run { list, head: head[t], end: m.tail[t], t, o };
+                    if let Some((o, onward)) = across {
+                        let run = Run { list, head: head[t], end: m.tail[t], t, o, onward };
                         let done = batch::<MASK>(&run, b, &mut m, &mut patterns, wide);
                         if done > 0 {
                             head[t] += done;

@@ -4,8 +4,12 @@
 //! moves, order and sponsors. Chunks take the vector path (`vector.rs`: AVX-512 or AVX2) where the
 //! level allows it, else the portable one (`chunk.rs`).
 
-use super::arrays::{At, CHUNK, Moving, Patterns, RUN, Run, Slices, candidate_box, clamp_masked, push_ends};
+use super::arrays::{
+    At, CHUNK, Moving, Pattern, Patterns, RUN, Run, Slices, candidate_box, clamp_masked, push_ends, slots,
+};
 use super::chunk::check_chunk;
+#[cfg(target_arch = "x86_64")]
+use super::lanes::Lanes;
 #[cfg(target_arch = "x86_64")]
 use super::vector;
 use crate::chainmail::body::FIXED;
@@ -61,8 +65,7 @@ pub(super) fn batch<const MASK: u8>(
     patterns: &mut Patterns,
     wide: Wide,
 ) -> usize {
-    let &Run { list, head, end, t, o } = run;
-    let width = b.width;
+    let &Run { list, head, end, t, o, .. } = run;
     let s0 = m.lists[list + head] as usize;
     if b.across.get(s0) != Some(&1) {
         return 0;
@@ -86,19 +89,99 @@ pub(super) fn batch<const MASK: u8>(
         }
         return k;
     }
-    let Some(&cls) = b.slot_class.get(s0 * width + t) else {
+    let Some(&cls) = b.slot_class.get(s0 * b.width + t) else {
         return 0;
     };
     let bounds = patterns.get::<MASK>(cls, b);
-    if down {
-        return match wide {
-            #[cfg(target_arch = "x86_64")]
-            Wide::Avx512(v) => vector::batch_down(v, run, b, m, bounds),
-            #[cfg(target_arch = "x86_64")]
-            Wide::Avx2(v) => vector::batch_down(v, run, b, m, bounds),
-            Wide::Portable => 0,
-        };
+    let cls = cls as usize;
+    match (wide, down) {
+        #[cfg(target_arch = "x86_64")]
+        (Wide::Avx512(v), true) => vector::batch_down(v, run, b, m, bounds),
+        #[cfg(target_arch = "x86_64")]
+        (Wide::Avx2(v), true) => vector::batch_down(v, run, b, m, bounds),
+        (Wide::Portable, true) => 0,
+        #[cfg(target_arch = "x86_64")]
+        (Wide::Avx512(v), false) => batch_up::<MASK, _>(v, run, b, m, [cls, s0, c0], bounds),
+        #[cfg(target_arch = "x86_64")]
+        (Wide::Avx2(v), false) => batch_up::<MASK, _>(v, run, b, m, [cls, s0, c0], bounds),
+        (Wide::Portable, false) => batch_up::<MASK, _>(Plain, run, b, m, [cls, s0, c0], bounds),
     }
+}
+
+/// A chunk's clamped positions, three coordinates per element.
+type Clamped = [f32; 3 * CHUNK];
+
+/// How a run's chunks are checked, written and pushed: with vector registers of one width, or
+/// portably. Chosen once per run, so that a chunk's path has no branch on the width (and nothing of
+/// another width's path is set up in its loop).
+trait ChunkPath: Copy {
+    /// As [`vector::chunk`]: how many leading elements pass and whether they were written.
+    fn chunk(
+        self,
+        b: Slices<'_>,
+        m: &mut Moving<'_>,
+        at: At,
+        box_: &Pattern,
+        q: &mut Clamped,
+    ) -> (usize, bool);
+    /// Pushes candidates `c..c + k` to the list of slot `u` where their neighbours `d..d + k` have
+    /// not moved.
+    fn push(self, m: &mut Moving<'_>, u: usize, cdk: [usize; 3]);
+}
+
+/// The portable chunks, plain loops over lanes.
+#[derive(Clone, Copy)]
+struct Plain;
+
+impl ChunkPath for Plain {
+    #[inline(always)]
+    fn chunk(
+        self,
+        b: Slices<'_>,
+        m: &mut Moving<'_>,
+        at: At,
+        box_: &Pattern,
+        q: &mut Clamped,
+    ) -> (usize, bool) {
+        (check_chunk(b, m, at, box_, q), false)
+    }
+    #[inline(always)]
+    fn push(self, m: &mut Moving<'_>, u: usize, cdk: [usize; 3]) {
+        push(m, u, cdk);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<L: Lanes> ChunkPath for L {
+    #[inline(always)]
+    fn chunk(
+        self,
+        b: Slices<'_>,
+        m: &mut Moving<'_>,
+        at: At,
+        box_: &Pattern,
+        q: &mut Clamped,
+    ) -> (usize, bool) {
+        vector::chunk(self, b, m, at, box_, q)
+    }
+    #[inline(always)]
+    fn push(self, m: &mut Moving<'_>, u: usize, cdk: [usize; 3]) {
+        vector::push(self, m, u, cdk, false);
+    }
+}
+
+/// [`batch`] for a run up the row, from sponsor `s0` and candidate `c0` of slot class `cls`.
+#[inline(always)]
+fn batch_up<const MASK: u8, P: ChunkPath>(
+    path: P,
+    run: &Run,
+    b: Slices<'_>,
+    m: &mut Moving<'_>,
+    [cls, s0, c0]: [usize; 3],
+    bounds: &Pattern,
+) -> usize {
+    let &Run { list, head, end, t, onward, .. } = run;
+    let width = b.width;
     let mut done = 0;
     let mut q = [0.0f32; 3 * CHUNK];
     while done < RUN {
@@ -109,13 +192,7 @@ pub(super) fn batch<const MASK: u8>(
             0
         } else {
             let k;
-            (k, written) = match wide {
-                #[cfg(target_arch = "x86_64")]
-                Wide::Avx512(v) => vector::chunk(v, b, m, at, bounds, &mut q),
-                #[cfg(target_arch = "x86_64")]
-                Wide::Avx2(v) => vector::chunk(v, b, m, at, bounds, &mut q),
-                Wide::Portable => (check_chunk(b, m, at, bounds, &mut q), false),
-            };
+            (k, written) = path.chunk(b, m, at, bounds, &mut q);
             k
         };
         let k = if k > 0 {
@@ -128,11 +205,11 @@ pub(super) fn batch<const MASK: u8>(
                 && b.across.get(c) == Some(&1)
                 && !m.has_moved(c)
                 && b.flags[c] & FIXED == 0
-                && b.slot_class[s * width + t] == cls;
+                && b.slot_class[s * width + t] as usize == cls;
             if !ok {
                 break;
             }
-            let [lo, hi] = candidate_box(m.pos[s], b.classes[cls as usize].bounds);
+            let [lo, hi] = candidate_box(m.pos[s], b.classes[cls].bounds);
             let x = clamp_masked::<MASK>(m.pos[c], lo, hi);
             if x == m.pos[c] {
                 break;
@@ -151,20 +228,9 @@ pub(super) fn batch<const MASK: u8>(
         // are placed by the grid offsets and distinct rows apart), written without a branch: each
         // slot takes the entry, the end advances only for unmoved neighbours (the list has room: `c`
         // is not in it yet).
-        for u in 0..width {
-            let ou = b.offs[u];
-            if ou == -o || ou.unsigned_abs() == 1 {
-                continue;
-            }
+        for u in slots(onward) {
             // In range: the candidates' neighbours across rows are at the grid offsets.
-            let d = c.wrapping_add_signed(ou);
-            match wide {
-                #[cfg(target_arch = "x86_64")]
-                Wide::Avx512(v) => vector::push(v, m, u, [c, d, k], false),
-                #[cfg(target_arch = "x86_64")]
-                Wide::Avx2(v) => vector::push(v, m, u, [c, d, k], false),
-                Wide::Portable => push(m, u, [c, d, k]),
-            }
+            path.push(m, u, [c, c.wrapping_add_signed(b.offs[u]), k]);
         }
         done += k;
         if k < CHUNK {

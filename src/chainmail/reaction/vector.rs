@@ -4,7 +4,9 @@
 //! up a row ([`chunk`]) or down it ([`batch_down`]); the results are the portable path's and the
 //! one-by-one path's bit for bit.
 
-use super::arrays::{At, CHUNK, Moving, Pattern, RUN, Run, Slices, bad_bytes, class_breaks, push_ends};
+use super::arrays::{
+    At, CHUNK, Moving, Pattern, RUN, Run, Slices, bad_bytes, class_breaks, push_ends, slots,
+};
 use super::lanes::Lanes;
 
 /// Lane `i` holds `i`.
@@ -227,7 +229,7 @@ pub(super) fn batch_down<L: Lanes>(
     m: &mut Moving<'_>,
     bounds: &Pattern,
 ) -> usize {
-    let &Run { list, head, end, t, o } = run;
+    let &Run { list, head, end, t, o, onward } = run;
     let s0 = m.lists[list + head] as usize;
     let c0 = s0.wrapping_add_signed(o);
     let mut done = 0;
@@ -240,12 +242,8 @@ pub(super) fn batch_down<L: Lanes>(
             break;
         }
         // Pushes across rows, away from the sponsors, in the run's order.
-        for u in 0..b.width {
-            let ou = b.offs[u];
-            if ou == -o || ou.unsigned_abs() == 1 {
-                continue;
-            }
-            push(v, m, u, [c, c.wrapping_add_signed(ou), k], true);
+        for u in slots(onward) {
+            push(v, m, u, [c, c.wrapping_add_signed(b.offs[u]), k], true);
         }
         done += k;
         if k < CHUNK {
@@ -282,6 +280,14 @@ pub(super) fn push<L: Lanes>(v: L, m: &mut Moving<'_>, u: usize, [c, d, k]: [usi
         *end += k;
         return;
     }
+    push_each(stamp, list, end, g, [c, d, k], down);
+}
+
+/// [`push`] one entry at a time, where some neighbour has moved or the chunk runs past an end (rare:
+/// out of line, so that its loop's setup stays off the chunk's path).
+#[cold]
+#[inline(never)]
+fn push_each(stamp: &[u32], list: &mut [u32], end: &mut usize, g: u32, [c, d, k]: [usize; 3], down: bool) {
     for j in 0..k {
         let (c, d) = if down { (c - j, d - j) } else { (c + j, d + j) };
         list[*end] = c as u32;
