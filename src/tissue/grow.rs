@@ -116,8 +116,15 @@ impl Growth {
         else {
             return;
         };
-        // The words grown can reach (a pattern's offsets, or an element of none anywhere).
-        let (mut first, mut last) = (lo, hi);
+        // The words grown can reach: the moved words' span widened by the patterns' offsets (a word
+        // either side of the farthest), and any word an element of no pattern reaches.
+        let (below, above) = self
+            .patterns
+            .iter()
+            .flat_map(|p| &p.offsets)
+            .fold((0i64, 0i64), |(b, a), &o| (b.min(o.div_euclid(64) - 1), a.max(o.div_euclid(64) + 1)));
+        let clamp = |w: i64| w.clamp(0, words as i64 - 1) as usize;
+        let (mut first, mut last) = (clamp(lo as i64 + below), clamp(hi as i64 + above));
         let grown = &mut self.grown[..];
         for w in lo..=hi {
             let x = moved[w];
@@ -139,20 +146,16 @@ impl Growth {
                     if let Ok(q) = usize::try_from(q) {
                         if let Some(g) = grown.get_mut(q) {
                             *g |= part << r;
-                            first = first.min(q);
-                            last = last.max(q);
                         }
                         if r != 0
                             && let Some(g) = grown.get_mut(q + 1)
                         {
                             *g |= part >> (64 - r);
-                            last = last.max(q + 1);
                         }
                     } else if r != 0 && q == -1 {
                         // (Only the high part lands in the lattice: word 0.)
                         if let Some(g) = grown.get_mut(0) {
                             *g |= part >> (64 - r);
-                            first = 0;
                         }
                     }
                 }

@@ -136,13 +136,15 @@ impl Tissue {
                 }
             });
         }
-        self.active.clear();
+        // (The list taken out of `self` while it is rebuilt, so that its length stays in a register.)
+        let mut active = std::mem::take(&mut self.active);
+        active.clear();
         let in_active = &mut self.in_active[..];
         for (w, &word) in bits.iter().enumerate() {
             let first = w * 64;
             // A whole word of the region (most of a large one): its 64 elements at once.
             if word == u64::MAX && first + 64 <= in_active.len() {
-                self.active.extend((first as u32..first as u32 + 64).map(crate::chainmail::ElementId));
+                active.extend((first as u32..first as u32 + 64).map(crate::chainmail::ElementId));
                 in_active[first..first + 64].fill(true);
                 continue;
             }
@@ -150,12 +152,13 @@ impl Tissue {
             while x != 0 {
                 let e = (w * 64) as u32 + x.trailing_zeros();
                 x &= x - 1;
-                self.active.push(crate::chainmail::ElementId(e));
+                active.push(crate::chainmail::ElementId(e));
                 if let Some(a) = in_active.get_mut(e as usize) {
                     *a = true;
                 }
             }
         }
+        self.active = active;
     }
 
     /// Shrinks the disturbed region to the elements still moving and their neighbours (elements put
