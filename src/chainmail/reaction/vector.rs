@@ -196,15 +196,13 @@ fn chunk_down<L: Lanes>(v: L, b: Slices<'_>, m: &mut Moving<'_>, at: At, bounds:
     let moved_now = v.equal_bits(st, gs);
     let breaks = breaks & if after == 0 { 0x7fff } else { 0xffff };
     let (x, still) = clamp(v, ps, pc, bounds);
-    // The highest failing lane, by memory order (16 when none fails).
-    let top = |bits: u128, per: u32| if bits == 0 { None } else { Some((127 - bits.leading_zeros()) / per) };
-    let failing = [
-        top(u128::from(moved_now), 1),
-        top(bad_bytes, 8),
-        top(u128::from(breaks), 1),
-        top(u128::from(still), 3),
-    ];
-    let highest = failing.iter().flatten().max().map_or(0, |&i| i as usize + 1);
+    // One more than the highest failing lane, by memory order (0 when none fails): the highest set
+    // bit `b` of bits `per` to a lane is in lane `b / per`, and `(b + 1).div_ceil(per)` is one more.
+    let above = |bits: u128, per: u32| (128 - bits.leading_zeros()).div_ceil(per) as usize;
+    let highest = above(u128::from(moved_now), 1)
+        .max(above(bad_bytes, 8))
+        .max(above(u128::from(breaks), 1))
+        .max(above(u128::from(still), 3));
     let k = (CHUNK - highest).min((!in_sequence).trailing_zeros() as usize);
     // Fewer than two moves in all are left to the one-by-one path.
     if k == 0 || k + after < 2 {
