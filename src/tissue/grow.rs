@@ -26,11 +26,12 @@ const KEY: usize = 8;
 /// above).
 const PATTERNS: usize = 4;
 
-/// One pattern: its neighbours' offsets in element order and the elements that have exactly
-/// those neighbours, as bits.
+/// One pattern: its neighbours' offsets in element order, each as whole words and the bits left
+/// over (`off.div_euclid(64)`, `off.rem_euclid(64)`), and the elements that have exactly those
+/// neighbours, as bits.
 #[derive(Clone, Debug, Default)]
 struct Pattern {
-    offsets: Vec<i64>,
+    shifts: Vec<(i64, u32)>,
     mask: Vec<u64>,
 }
 
@@ -87,7 +88,10 @@ impl Growth {
         let keys: Vec<(usize, [i64; KEY])> = common.iter().map(|c| c.0).collect();
         self.patterns = keys
             .iter()
-            .map(|&(len, k)| Pattern { offsets: k[..len].to_vec(), mask: vec![0; words] })
+            .map(|&(len, k)| Pattern {
+                shifts: k[..len].iter().map(|&o| (o.div_euclid(64), o.rem_euclid(64) as u32)).collect(),
+                mask: vec![0; words],
+            })
             .collect();
         self.rest = vec![0; words];
         for e in 0..n {
@@ -121,8 +125,8 @@ impl Growth {
         let (below, above) = self
             .patterns
             .iter()
-            .flat_map(|p| &p.offsets)
-            .fold((0i64, 0i64), |(b, a), &o| (b.min(o.div_euclid(64) - 1), a.max(o.div_euclid(64) + 1)));
+            .flat_map(|p| &p.shifts)
+            .fold((0i64, 0i64), |(b, a), &(q, _)| (b.min(q - 1), a.max(q + 1)));
         let clamp = |w: i64| w.clamp(0, words as i64 - 1) as usize;
         let (mut first, mut last) = (clamp(lo as i64 + below), clamp(hi as i64 + above));
         let grown = &mut self.grown[..];
@@ -138,11 +142,11 @@ impl Growth {
                 if part == 0 {
                     continue;
                 }
-                for &off in &p.offsets {
-                    // Bit `b` of `part` is element `64 w + b`; its neighbour at `off` is bit `b` of
-                    // the word starting at element `64 w + off`, which spans two words.
-                    let base = (w as i64) * 64 + off;
-                    let (q, r) = (base.div_euclid(64), base.rem_euclid(64) as u32);
+                for &(words_off, r) in &p.shifts {
+                    // Bit `b` of `part` is element `64 w + b`; its neighbour at offset `off` is bit `b`
+                    // of the word starting at element `64 w + off`, which spans two words: word
+                    // `w + off.div_euclid(64)` from bit `r`, and the next.
+                    let q = w as i64 + words_off;
                     if let Ok(q) = usize::try_from(q) {
                         if let Some(g) = grown.get_mut(q) {
                             *g |= part << r;
