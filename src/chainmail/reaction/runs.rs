@@ -121,7 +121,7 @@ trait ChunkPath: Copy {
         b: Slices<'_>,
         m: &mut Moving<'_>,
         at: At,
-        box_: &Pattern,
+        bounds: &Pattern,
         q: &mut Clamped,
     ) -> (usize, bool);
     /// Pushes candidates `c..c + k` to the list of slot `u` where their neighbours `d..d + k` have
@@ -140,10 +140,10 @@ impl ChunkPath for Plain {
         b: Slices<'_>,
         m: &mut Moving<'_>,
         at: At,
-        box_: &Pattern,
+        bounds: &Pattern,
         q: &mut Clamped,
     ) -> (usize, bool) {
-        (check_chunk(b, m, at, box_, q), false)
+        (check_chunk(b, m, at, bounds, q), false)
     }
     #[inline(always)]
     fn push(self, m: &mut Moving<'_>, u: usize, cdk: [usize; 3]) {
@@ -159,10 +159,10 @@ impl<L: Lanes> ChunkPath for L {
         b: Slices<'_>,
         m: &mut Moving<'_>,
         at: At,
-        box_: &Pattern,
+        bounds: &Pattern,
         q: &mut Clamped,
     ) -> (usize, bool) {
-        vector::chunk(self, b, m, at, box_, q)
+        vector::chunk(self, b, m, at, bounds, q)
     }
     #[inline(always)]
     fn push(self, m: &mut Moving<'_>, u: usize, cdk: [usize; 3]) {
