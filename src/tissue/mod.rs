@@ -823,8 +823,7 @@ impl Tissue {
         keep.clear();
         // Each material's tear ratio, squared (lengths are compared squared: no root per link).
         let mut tear2 = std::mem::take(&mut self.tear_scratch);
-        tear2.clear();
-        tear2.extend(self.body.materials().iter().map(|m| m.tear_ratio.map_or(f32::INFINITY, |r| r * r)));
+        scan::tear_ratios2_into(&self.body, &mut tear2);
         let mut hits = std::mem::take(&mut self.tear_hits);
         hits.clear();
         // Each slot class's box widened by the tolerance (a handful of classes).
@@ -840,23 +839,21 @@ impl Tissue {
         let flat = |p| Vec3::from(Surface::flat_to_world(p));
         let general = |p| Vec3::from(geometry.to_world(p));
         if matches!(geometry, Geometry::Surface(s) if s.is_flat()) {
-            self.scan_table.refresh(&self.body);
+            self.scan_table.refresh(&self.body, &tear2);
         }
         let mut out = ScanFound { keep: boxes.is_some().then_some(&mut keep), ..Default::default() };
         let mut spare = std::mem::take(&mut self.scan_spare);
         const SPLIT: usize = scan::SPLIT_MIN;
         let max2 = match (geometry, boxes) {
             (Geometry::Surface(s), None) if s.is_flat() => {
-                let m = self.scan_flat_split::<false>(
-                    &tear2, &mut hits, &NO_BOXES, &wide, &mut out, &mut spare, SPLIT,
-                );
+                let m =
+                    self.scan_flat_split::<false>(&mut hits, &NO_BOXES, &wide, &mut out, &mut spare, SPLIT);
                 #[cfg(debug_assertions)]
                 self.check_scan::<false>(&tear2, &hits, flat, &NO_BOXES, &wide, &out, m);
                 m
             }
             (Geometry::Surface(s), Some(b)) if s.is_flat() => {
-                let m =
-                    self.scan_flat_split::<true>(&tear2, &mut hits, &b, &wide, &mut out, &mut spare, SPLIT);
+                let m = self.scan_flat_split::<true>(&mut hits, &b, &wide, &mut out, &mut spare, SPLIT);
                 #[cfg(debug_assertions)]
                 self.check_scan::<true>(&tear2, &hits, flat, &b, &wide, &out, m);
                 m

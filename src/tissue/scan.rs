@@ -26,6 +26,9 @@ pub(crate) struct ScanLink {
     /// copies of the body's, as of [`ScanTable::epoch`].
     class: u32,
     material: u32,
+    /// The material's squared tear ratio (infinite for none), as of [`ScanTable::ratio2`]: read here,
+    /// not through the material, in the scan's loop.
+    ratio2: f32,
 }
 
 /// Each element's links from its `a` end: those of element `e` are `links[start[e]..start[e + 1]]`.
@@ -38,6 +41,8 @@ pub(crate) struct ScanTable {
     slots: Vec<u32>,
     /// The body's [`Body::boxes_epoch`] the classes and materials were copied at.
     epoch: u64,
+    /// Each material's squared tear ratio the links' `ratio2` were copied from.
+    ratio2: Vec<f32>,
 }
 
 impl ScanTable {
@@ -65,36 +70,54 @@ impl ScanTable {
                     rest2: rest * rest,
                     class: 0,
                     material: 0,
+                    ratio2: f32::INFINITY,
                 });
                 slots.push((e * w + s - s0) as u32);
             }
         }
         start.push(links.len() as u32);
-        let mut table = ScanTable { start, links, slots, epoch: 0 };
-        table.refresh(body);
+        let mut table = ScanTable { start, links, slots, epoch: 0, ratio2: Vec::new() };
+        table.refresh(body, &tear_ratios2(body));
         table
     }
 
-    /// Copies the body's classes and materials again if its boxes have changed since the last copy
-    /// (a material edited: rare, and then once for the whole table).
-    pub(crate) fn refresh(&mut self, body: &Body) {
-        if self.epoch == body.boxes_epoch && self.epoch != 0 {
+    /// Copies the body's classes and materials again if its boxes have changed since the last copy,
+    /// or the materials' squared tear ratios `ratio2` (a material edited: rare, and then once for
+    /// the whole table).
+    pub(crate) fn refresh(&mut self, body: &Body, ratio2: &[f32]) {
+        if self.epoch == body.boxes_epoch && self.epoch != 0 && self.ratio2 == ratio2 {
             return;
         }
         for (k, &slot) in self.links.iter_mut().zip(&self.slots) {
             k.class = body.slot_class.get(slot as usize).copied().unwrap_or(0);
             k.material =
                 body.link_material.get((k.link & !LAYER) as usize).map_or(u32::MAX, |m| m.index() as u32);
+            k.ratio2 = ratio2.get(k.material as usize).copied().unwrap_or(f32::INFINITY);
         }
         self.epoch = body.boxes_epoch;
+        self.ratio2.clear();
+        self.ratio2.extend_from_slice(ratio2);
     }
+}
+
+/// Each of the body's materials' squared tear ratio (infinite for none): what the tear check compares
+/// squared lengths with.
+pub(crate) fn tear_ratios2(body: &Body) -> Vec<f32> {
+    let mut ratio2 = Vec::new();
+    tear_ratios2_into(body, &mut ratio2);
+    ratio2
+}
+
+/// [`tear_ratios2`] into `ratio2` (cleared first).
+pub(crate) fn tear_ratios2_into(body: &Body, ratio2: &mut Vec<f32>) {
+    ratio2.clear();
+    ratio2.extend(body.materials().iter().map(|m| m.tear_ratio.map_or(f32::INFINITY, |r| r * r)));
 }
 
 impl Tissue {
     /// [`Tissue::scan_region`] on a flat surface, whose world is its lattice with the axes permuted
     /// (`Surface::flat_to_world`: lengths are summed in the world's order, so every figure is the plain
-    /// path's to the bit), reading the scan table. `ratio2` is each material's squared tear ratio
-    /// (infinite for none).
+    /// path's to the bit), reading the scan table (which holds each link's tear ratio).
     ///
     /// Most links hold nothing of interest: inside their box, and neither the largest stretch so far
     /// nor near their tear ratio. The loop tests both with a few comparisons and sends the rest to
@@ -103,7 +126,6 @@ impl Tissue {
     pub(super) fn scan_flat<const BOXES: bool>(
         &self,
         region: &[ElementId],
-        ratio2: &[f32],
         hits: &mut Vec<LinkId>,
         boxes: &BoxCheck<'_>,
         wide: &[[[f32; 3]; 2]],
@@ -152,9 +174,8 @@ impl Tissue {
                 // `world(q).distance_squared(world(p))` with the world's axes `(u, h, v)`.
                 let d = [q[0] - p[0], q[2] - p[2], q[1] - p[1]];
                 let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                let ratio = ratio2.get(k.material as usize).copied().unwrap_or(f32::INFINITY);
-                if near_bar(d2, k.rest2, ratio, k.link & LAYER != 0, max_stretch2) {
-                    scan_link(k, d2, ratio, &mut max_stretch2, hits);
+                if near_bar(d2, k.rest2, k.ratio2, k.link & LAYER != 0, max_stretch2) {
+                    scan_link(k, d2, &mut max_stretch2, hits);
                 }
                 // Only a link with an end the step moved counts outside its box, and most links have
                 // none: the box is tested only for those (a stamp read, where the box takes a dozen
@@ -236,7 +257,6 @@ impl Tissue {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn scan_flat_split<const BOXES: bool>(
         &self,
-        ratio2: &[f32],
         hits: &mut Vec<LinkId>,
         boxes: &BoxCheck<'_>,
         wide: &[[[f32; 3]; 2]],
@@ -246,7 +266,7 @@ impl Tissue {
     ) -> f32 {
         let region = &self.active[..];
         if !splits(region.len(), split_min) {
-            return self.scan_flat_simd::<BOXES>(region, ratio2, hits, boxes, wide, out);
+            return self.scan_flat_simd::<BOXES>(region, hits, boxes, wide, out);
         }
         let len = PIECE.min(split_min).max(1);
         let pieces = region.len().div_ceil(len).clamp(2, PIECES);
@@ -266,7 +286,7 @@ impl Tissue {
             hits.clear();
             keep.clear();
             let mut found = ScanFound { outside: false, drift: start, keep: keeps.then_some(keep) };
-            *max_stretch2 = self.scan_flat_simd::<BOXES>(part, ratio2, hits, boxes, wide, &mut found);
+            *max_stretch2 = self.scan_flat_simd::<BOXES>(part, hits, boxes, wide, &mut found);
             (*outside, *drift) = (found.outside, found.drift);
         });
         let mut max_stretch2 = 0.0f32;
@@ -304,13 +324,12 @@ impl Tissue {
     fn scan_flat_simd<const BOXES: bool>(
         &self,
         region: &[ElementId],
-        ratio2: &[f32],
         hits: &mut Vec<LinkId>,
         boxes: &BoxCheck<'_>,
         wide: &[[[f32; 3]; 2]],
         out: &mut ScanFound<'_>,
     ) -> f32 {
-        let scan = FlatScan::<BOXES> { tissue: self, region, ratio2, hits, boxes, wide, out };
+        let scan = FlatScan::<BOXES> { tissue: self, region, hits, boxes, wide, out };
         self.ws.simd().arch().dispatch(scan)
     }
 }
@@ -319,7 +338,6 @@ impl Tissue {
 struct FlatScan<'a, 'b, 'c, const BOXES: bool> {
     tissue: &'a Tissue,
     region: &'a [ElementId],
-    ratio2: &'a [f32],
     hits: &'a mut Vec<LinkId>,
     boxes: &'a BoxCheck<'b>,
     wide: &'a [[[f32; 3]; 2]],
@@ -331,15 +349,15 @@ impl<const BOXES: bool> pulp::WithSimd for FlatScan<'_, '_, '_, BOXES> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> f32 {
-        self.tissue.scan_flat::<BOXES>(self.region, self.ratio2, self.hits, self.boxes, self.wide, self.out)
+        self.tissue.scan_flat::<BOXES>(self.region, self.hits, self.boxes, self.wide, self.out)
     }
 }
 
 /// The rest of `tear_test` for a link the scan found near its bar, out of the scan's loop.
 #[cold]
 #[inline(never)]
-fn scan_link(k: &ScanLink, d2: f32, ratio2: f32, max_stretch2: &mut f32, hits: &mut Vec<LinkId>) {
-    tear_divide(d2, k.rest2, ratio2, k.link & LAYER != 0, max_stretch2, || {
+fn scan_link(k: &ScanLink, d2: f32, max_stretch2: &mut f32, hits: &mut Vec<LinkId>) {
+    tear_divide(d2, k.rest2, k.ratio2, k.link & LAYER != 0, max_stretch2, || {
         hits.push(LinkId(k.link & !LAYER))
     });
 }
@@ -386,13 +404,19 @@ mod tests {
             .zip(&table.slots)
             .filter(|&(k, &slot)| {
                 let material = t.body.link_material(LinkId(k.link & !LAYER)).map(|m| m.index() as u32);
-                k.class != t.body.slot_class[slot as usize] || Some(k.material) != material
+                let ratio2 = material
+                    .and_then(|m| t.body.materials().get(m as usize))
+                    .and_then(|m| m.tear_ratio)
+                    .map_or(f32::INFINITY, |r| r * r);
+                k.class != t.body.slot_class[slot as usize]
+                    || Some(k.material) != material
+                    || k.ratio2.to_bits() != ratio2.to_bits()
             })
             .count()
     }
 
-    /// The table's copies of the boxes' classes and the materials follow an edited material and a link
-    /// given another material, at the next scan (the plain path the scan is compared with in debug
+    /// The table's copies of the boxes' classes, the materials and their tear ratios follow an edited
+    /// material and a link given another material, at the next scan (the plain path the scan is compared with in debug
     /// builds reads the body's own).
     #[test]
     fn the_scan_table_follows_edited_materials() {
@@ -404,6 +428,11 @@ mod tests {
         assert!(stale(&t) > 0, "the edit changed no box");
         t.scan_tears(None);
         assert_eq!(stale(&t), 0, "the scan's table kept the old boxes");
+        let weaker = Material { tear_ratio: Some(2.0), ..tighter };
+        t.body_mut().set_material(m, weaker).expect("edit");
+        assert!(stale(&t) > 0, "the edit changed no tear ratio");
+        t.scan_tears(None);
+        assert_eq!(stale(&t), 0, "the scan's table kept the old tear ratio");
         let other = MaterialId(if m.0 == 0 { 1 } else { 0 });
         t.body_mut().set_link_material(LinkId(0), other).expect("material");
         assert!(stale(&t) > 0, "the link kept its material");
@@ -417,8 +446,7 @@ mod tests {
         t: &Tissue,
         split_min: usize,
     ) -> (Vec<LinkId>, Vec<ElementId>, bool, u32, u32) {
-        let ratio2: Vec<f32> =
-            t.body.materials().iter().map(|m| m.tear_ratio.map_or(f32::INFINITY, |r| r * r)).collect();
+        // (The table holds each link's tear ratio, copied when the tissue was built.)
         let tol = 1e-4;
         let wide: Vec<_> = t.body.classes.iter().map(|c| limits::widen(c.bounds, tol)).collect();
         // Moved this step: only the last few elements (the one moved far among them), so that only
@@ -427,8 +455,7 @@ mod tests {
         let boxes = BoxCheck { tol, stamps: &stamps, stamp: 1 };
         let (mut hits, mut keep, mut spare) = (Vec::new(), Vec::new(), ScanSpare::default());
         let mut out = ScanFound { keep: BOXES.then_some(&mut keep), ..Default::default() };
-        let m =
-            t.scan_flat_split::<BOXES>(&ratio2, &mut hits, &boxes, &wide, &mut out, &mut spare, split_min);
+        let m = t.scan_flat_split::<BOXES>(&mut hits, &boxes, &wide, &mut out, &mut spare, split_min);
         let (outside, drift) = (out.outside, out.drift.to_bits());
         (hits, keep, outside, drift, m.to_bits())
     }
