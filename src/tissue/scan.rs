@@ -1,9 +1,9 @@
 //! The tear scan's table for flat surfaces: each element's links from its `a` end, with what the scan
 //! reads of them that never changes (the neighbour, the kind, the squared rest length) and copies of
-//! what changes only when a material is edited (the box's class, the material), in the adjacency's
-//! order. The scan of the disturbed region ([`Tissue::scan_tears`]) then reads one record per link it
-//! checks, not the element's whole adjacency (half of it the links' `b` ends, skipped one by one) and
-//! four link- or slot-indexed arrays. [`Tissue::scan_region`] is the plain path;
+//! what changes only when a material is edited (the box's class, the material's tear ratio), in the
+//! adjacency's order. The scan of the disturbed region ([`Tissue::scan_tears`]) then reads one record
+//! per link it checks, not the element's whole adjacency (half of it the links' `b` ends, skipped one
+//! by one) and four link- or slot-indexed arrays. [`Tissue::scan_region`] is the plain path;
 //! in debug builds every scan compares the two.
 
 use super::{BoxCheck, Geometry, LinkKind, ScanFound, Tissue, limits, near_bar, settle, tear_divide};
@@ -22,12 +22,11 @@ pub(crate) struct ScanLink {
     link: u32,
     /// The squared world rest length (at least the smallest positive float, squared).
     rest2: f32,
-    /// The class of the link's slot at its `a` end (the box the scan tests), and the link's material:
-    /// copies of the body's, as of [`ScanTable::epoch`].
+    /// The class of the link's slot at its `a` end (the box the scan tests): a copy of the body's, as
+    /// of [`ScanTable::epoch`].
     class: u32,
-    material: u32,
-    /// The material's squared tear ratio (infinite for none), as of [`ScanTable::ratio2`]: read here,
-    /// not through the material, in the scan's loop.
+    /// The squared tear ratio of the link's material (infinite for none), as of [`ScanTable::epoch`]
+    /// and [`ScanTable::ratio2`]: read here, not through the material, in the scan's loop.
     ratio2: f32,
 }
 
@@ -39,7 +38,7 @@ pub(crate) struct ScanTable {
     /// Each link's slot at its `a` end (`a · width + t`), in the order of `links`: where the classes
     /// are read again when the body's boxes change.
     slots: Vec<u32>,
-    /// The body's [`Body::boxes_epoch`] the classes and materials were copied at.
+    /// The body's [`Body::boxes_epoch`] the classes and tear ratios were copied at.
     epoch: u64,
     /// Each material's squared tear ratio the links' `ratio2` were copied from.
     ratio2: Vec<f32>,
@@ -69,7 +68,6 @@ impl ScanTable {
                     link: raw | if layer { LAYER } else { 0 },
                     rest2: rest * rest,
                     class: 0,
-                    material: 0,
                     ratio2: f32::INFINITY,
                 });
                 slots.push((e * w + s - s0) as u32);
@@ -81,7 +79,7 @@ impl ScanTable {
         table
     }
 
-    /// Copies the body's classes and materials again if its boxes have changed since the last copy,
+    /// Copies the body's classes and tear ratios again if its boxes have changed since the last copy,
     /// or the materials' squared tear ratios `ratio2` (a material edited: rare, and then once for
     /// the whole table).
     pub(crate) fn refresh(&mut self, body: &Body, ratio2: &[f32]) {
@@ -90,9 +88,9 @@ impl ScanTable {
         }
         for (k, &slot) in self.links.iter_mut().zip(&self.slots) {
             k.class = body.slot_class.get(slot as usize).copied().unwrap_or(0);
-            k.material =
-                body.link_material.get((k.link & !LAYER) as usize).map_or(u32::MAX, |m| m.index() as u32);
-            k.ratio2 = ratio2.get(k.material as usize).copied().unwrap_or(f32::INFINITY);
+            let material =
+                body.link_material.get((k.link & !LAYER) as usize).map_or(usize::MAX, |m| m.index());
+            k.ratio2 = ratio2.get(material).copied().unwrap_or(f32::INFINITY);
         }
         self.epoch = body.boxes_epoch;
         self.ratio2.clear();
@@ -395,7 +393,7 @@ mod tests {
         .expect("tissue")
     }
 
-    /// Links whose copies in the table differ from the body's class and material.
+    /// Links whose copies in the table differ from the body's class and their material's tear ratio.
     fn stale(t: &Tissue) -> usize {
         let table = &t.scan_table;
         table
@@ -408,16 +406,14 @@ mod tests {
                     .and_then(|m| t.body.materials().get(m as usize))
                     .and_then(|m| m.tear_ratio)
                     .map_or(f32::INFINITY, |r| r * r);
-                k.class != t.body.slot_class[slot as usize]
-                    || Some(k.material) != material
-                    || k.ratio2.to_bits() != ratio2.to_bits()
+                k.class != t.body.slot_class[slot as usize] || k.ratio2.to_bits() != ratio2.to_bits()
             })
             .count()
     }
 
-    /// The table's copies of the boxes' classes, the materials and their tear ratios follow an edited
-    /// material and a link given another material, at the next scan (the plain path the scan is compared with in debug
-    /// builds reads the body's own).
+    /// The table's copies of the boxes' classes and the materials' tear ratios follow an edited
+    /// material and a link given another material, at the next scan (the plain path the scan is
+    /// compared with in debug builds reads the body's own).
     #[test]
     fn the_scan_table_follows_edited_materials() {
         let mut t = tissue();
@@ -433,6 +429,7 @@ mod tests {
         assert!(stale(&t) > 0, "the edit changed no tear ratio");
         t.scan_tears(None);
         assert_eq!(stale(&t), 0, "the scan's table kept the old tear ratio");
+        // (Another material, whose boxes and tear ratio differ from the edited one's.)
         let other = MaterialId(if m.0 == 0 { 1 } else { 0 });
         t.body_mut().set_link_material(LinkId(0), other).expect("material");
         assert!(stale(&t) > 0, "the link kept its material");
