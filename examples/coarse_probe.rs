@@ -80,12 +80,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             err.sort_by(f64::total_cmp);
             let max = err.last().copied().unwrap_or(0.0);
             let p99 = err.get(err.len().saturating_sub(1) * 99 / 100).copied().unwrap_or(0.0);
+            // The elements a coarser lattice would have to keep fine: those the filling-in misses by
+            // more than a few micrometres.
+            let over = |um: f64| err.iter().filter(|&&e| e > um * 1e-6).count();
             println!(
-                "    every {f}: height error largest {:.1} um ({:.2} % of the lift), p99 {:.1} um; largest stretch {:.3}",
+                "    every {f}: height error largest {:.1} um ({:.2} % of the lift), p99 {:.1} um; largest stretch {:.3}; \
+                 off by more than 2 / 5 / 20 um: {} / {} / {} elements",
                 max * 1e6,
                 100.0 * max / lift.max(1e-12),
                 p99 * 1e6,
-                largest(&filled)
+                largest(&filled),
+                over(2.0),
+                over(5.0),
+                over(20.0)
             );
         }
     }
