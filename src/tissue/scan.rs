@@ -138,6 +138,9 @@ impl Tissue {
         let moving = |i: usize| last_move.get(i).is_some_and(|&m| m > settle::SETTLED);
         let mut max_stretch2 = 0.0f32;
         let mut drift = out.drift;
+        // (The kept list taken out of `out` for the loop, so that its place is not read again at
+        // every element.)
+        let mut keep_list = out.keep.take();
         for &id in region {
             let e = id.index();
             let (Some(&t0), Some(&t1), Some(&p)) = (start.get(e), start.get(e + 1), pos.get(e)) else {
@@ -186,10 +189,11 @@ impl Tissue {
                     out.outside = true;
                 }
             }
-            if keep && let Some(k) = out.keep.as_deref_mut() {
+            if keep && let Some(k) = keep_list.as_deref_mut() {
                 k.push(id);
             }
         }
+        out.keep = keep_list;
         out.drift = drift;
         max_stretch2
     }
