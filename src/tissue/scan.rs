@@ -79,8 +79,8 @@ impl ScanTable {
         table
     }
 
-    /// Copies the body's classes and tear ratios again if its boxes have changed since the last copy,
-    /// or the materials' squared tear ratios `ratio2` (a material edited: rare, and then once for
+    /// Copies the body's classes and the materials' squared tear ratios (`ratio2`) again if its boxes
+    /// or those ratios have changed since the last copy (a material edited: rare, and then once for
     /// the whole table).
     pub(crate) fn refresh(&mut self, body: &Body, ratio2: &[f32]) {
         if self.epoch == body.boxes_epoch && self.epoch != 0 && self.ratio2 == ratio2 {
