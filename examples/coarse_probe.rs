@@ -102,6 +102,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     "      cells of {f} x {f} with an element off by more than {um} um: {cells} ({elements} elements)"
                 );
             }
+            // The step's disturbed region in this layer, and how much of it lies in cells the
+            // filling-in meets within 50 um (what a scan of cells would not walk element by element).
+            let region: Vec<usize> = tissue
+                .active_elements()
+                .iter()
+                .filter_map(|e| e.0.checked_sub(layer.first).filter(|&i| i < layer.count))
+                .map(|i| i as usize)
+                .collect();
+            let off = cell_map(&filled, &now, &moved, nu, nv, f, 50e-6);
+            let cu = nu.div_ceil(f);
+            let inside = region.iter().filter(|&&i| !off[(i / nu / f) * cu + (i % nu) / f]).count();
+            println!(
+                "      the region: {} of the layer's elements, {inside} in cells met within 50 um",
+                region.len()
+            );
         }
     }
     Ok(())
@@ -149,6 +164,29 @@ fn cells_off(
     tol: f64,
 ) -> (usize, usize) {
     let (cu, cv) = (nu.div_ceil(f), nv.div_ceil(f));
+    let off = cell_map(filled, field, moved, nu, nv, f, tol);
+    let cells = off.iter().filter(|&&o| o).count();
+    let size = |c: usize, n: usize| (n - c * f).min(f);
+    let elements = (0..cv)
+        .flat_map(|j| (0..cu).map(move |i| (i, j)))
+        .filter(|&(i, j)| off[j * cu + i])
+        .map(|(i, j)| size(i, nu) * size(j, nv))
+        .sum();
+    (cells, elements)
+}
+
+/// For each cell of `f × f` elements (row by row), whether it holds a moved element whose height
+/// `filled` misses by more than `tol`.
+fn cell_map(
+    filled: &[[f64; 3]],
+    field: &[[f64; 3]],
+    moved: &[bool],
+    nu: usize,
+    nv: usize,
+    f: usize,
+    tol: f64,
+) -> Vec<bool> {
+    let (cu, cv) = (nu.div_ceil(f), nv.div_ceil(f));
     let mut off = vec![false; cu * cv];
     for v in 0..nv {
         for u in 0..nu {
@@ -158,14 +196,7 @@ fn cells_off(
             }
         }
     }
-    let cells = off.iter().filter(|&&o| o).count();
-    let size = |c: usize, n: usize| (n - c * f).min(f);
-    let elements = (0..cv)
-        .flat_map(|j| (0..cu).map(move |i| (i, j)))
-        .filter(|&(i, j)| off[j * cu + i])
-        .map(|(i, j)| size(i, nu) * size(j, nv))
-        .sum();
-    (cells, elements)
+    off
 }
 
 /// The field kept at every `f`-th element along both axes (and the last) and filled in bilinearly.
