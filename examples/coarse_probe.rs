@@ -96,8 +96,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
             // A coarser lattice of blocks (the cells between kept elements) would keep whole blocks
             // fine: those with an element missed by more than the tolerance.
-            for um in [20.0, 50.0] {
-                let (cells, elements) = cells_off(&filled, &now, &moved, nu, nv, f, um * 1e-6);
+            let maps = [20.0, 50.0].map(|um| (um, cell_map(&filled, &now, &moved, nu, nv, f, um * 1e-6)));
+            for (um, off) in &maps {
+                let (cells, elements) = cells_off(off, nu, nv, f);
                 println!(
                     "      cells of {f} x {f} with an element off by more than {um} um: {cells} ({elements} elements)"
                 );
@@ -110,7 +111,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .filter_map(|e| e.0.checked_sub(layer.first).filter(|&i| i < layer.count))
                 .map(|i| i as usize)
                 .collect();
-            let off = cell_map(&filled, &now, &moved, nu, nv, f, 50e-6);
+            let off = &maps[1].1;
             let cu = nu.div_ceil(f);
             let inside = region.iter().filter(|&&i| !off[(i / nu / f) * cu + (i % nu) / f]).count();
             println!(
@@ -152,19 +153,9 @@ fn largest_stretch(field: &[[f64; 3]], rest: &[[f64; 3]], nu: usize, nv: usize) 
     largest
 }
 
-/// The cells between kept elements (every `f`-th along both axes) with a moved element whose height
-/// `filled` misses by more than `tol`, and how many elements those cells hold.
-fn cells_off(
-    filled: &[[f64; 3]],
-    field: &[[f64; 3]],
-    moved: &[bool],
-    nu: usize,
-    nv: usize,
-    f: usize,
-    tol: f64,
-) -> (usize, usize) {
+/// How many cells of `off` (a [`cell_map`]) are marked, and how many elements those cells hold.
+fn cells_off(off: &[bool], nu: usize, nv: usize, f: usize) -> (usize, usize) {
     let (cu, cv) = (nu.div_ceil(f), nv.div_ceil(f));
-    let off = cell_map(filled, field, moved, nu, nv, f, tol);
     let cells = off.iter().filter(|&&o| o).count();
     let size = |c: usize, n: usize| (n - c * f).min(f);
     let elements = (0..cv)
@@ -175,8 +166,8 @@ fn cells_off(
     (cells, elements)
 }
 
-/// For each cell of `f × f` elements (row by row), whether it holds a moved element whose height
-/// `filled` misses by more than `tol`.
+/// For each cell between kept elements (every `f`-th along both axes: `f × f` elements, row by row),
+/// whether it holds a moved element whose height `filled` misses by more than `tol`.
 fn cell_map(
     filled: &[[f64; 3]],
     field: &[[f64; 3]],

@@ -75,7 +75,9 @@ impl ScanTable {
         }
         start.push(links.len() as u32);
         let mut table = ScanTable { start, links, slots, epoch: 0, ratio2: Vec::new() };
-        table.refresh(body, &tear_ratios2(body));
+        let mut ratio2 = Vec::new();
+        tear_ratios2_into(body, &mut ratio2);
+        table.refresh(body, &ratio2);
         table
     }
 
@@ -98,15 +100,8 @@ impl ScanTable {
     }
 }
 
-/// Each of the body's materials' squared tear ratio (infinite for none): what the tear check compares
-/// squared lengths with.
-pub(crate) fn tear_ratios2(body: &Body) -> Vec<f32> {
-    let mut ratio2 = Vec::new();
-    tear_ratios2_into(body, &mut ratio2);
-    ratio2
-}
-
-/// [`tear_ratios2`] into `ratio2` (cleared first).
+/// Each of the body's materials' squared tear ratio (infinite for none), into `ratio2` (cleared
+/// first): what the tear check compares squared lengths with.
 pub(crate) fn tear_ratios2_into(body: &Body, ratio2: &mut Vec<f32>) {
     ratio2.clear();
     ratio2.extend(body.materials().iter().map(|m| m.tear_ratio.map_or(f32::INFINITY, |r| r * r)));
