@@ -194,12 +194,17 @@ impl Tissue {
     }
 }
 
-/// Regions of fewer elements are scanned on one thread: a second thread costs more to start than it
-/// saves. (It was 8 192 while the stepping thread could be held up by a helper without a core; see
-/// `chainmail::worker_pool`. At 2 048, on the Intel machine with AVX2, 2026-11-28, alternating pairs:
-/// the careful exercise's contact and limits phase fell from 175-200 to 112-142 us a step in its
-/// final lift at 128 x 96, and from 179-238 to 136-167 us in its first lift at 256 x 192.)
-pub(crate) const SPLIT_MIN: usize = 1 << 11;
+/// Regions of fewer elements are scanned on one thread: a second thread costs more than it saves.
+/// (8 192 while the stepping thread could be held up by a helper without a core, see
+/// `chainmail::worker_pool`; then 2 048, measured by the contact and limits phase alone. Measured by
+/// the whole step, 2026-11-29 (Intel machine, AVX2, the careful exercise, alternating runs), a split
+/// scan's phase is shorter but the next step's normal pass and relaxation are longer by as much:
+/// they write the positions the helper's core has just read (at 256 x 192, final lift, one thread
+/// against two: normal pass 295-302 against 345-352 us, relaxation 146-147 against 164, contact and
+/// limits 296-303 against 234-241). At 16 384 the 128 x 96 exercise's mean step fell from 45-47 to
+/// 41-42 us and its p99 from 325-355 to 289-299 us (five pairs); 256 x 192 moved within the noise
+/// (means 104-114 against 107-109 us); 512 x 384's large lifts still split.)
+pub(crate) const SPLIT_MIN: usize = 1 << 14;
 
 /// Elements in a piece of a split scan (and at least two pieces). Pieces of 512 cost the careful
 /// exercise's final lift at 256 x 192 more: its contact and limits phase over the first lift's mean
