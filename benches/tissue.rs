@@ -44,6 +44,7 @@ fn sheet(n: usize, layers: usize) -> Tissue {
             material: Material { stiffness: 0.3, ..Material::relative(2.0, 0.5, 0.5) },
             density: 1.0,
             min_gap: 0.0005,
+            spacing: 0.0,
         }),
         pinned: Pinning::Boundary,
     };

@@ -206,3 +206,44 @@ fn a_tear_is_told_in_millimetres_alike_at_every_resolution() {
     }
     alike("the dura torn (mm)", &torn_mm, 0.3);
 }
+
+/// The fibres' sites are physical (`connective.spacing`, 0.3 mm by default): at 512 × 384 the meninges
+/// scene joins its layers at the sites it joins them at 256 × 192, one element in two along each axis,
+/// not at four times as many.
+#[test]
+fn finer_than_the_fibres_the_same_fibres() {
+    let sites = |[nu, nv]: [u32; 2]| {
+        let mut scene = Scene::load(root().join("scenes/meninges.ron")).expect("scene");
+        let SceneTissue::Layers(layers) = &mut scene.tissue else { panic!("the meninges scene is layered") };
+        layers.resolution = [nu, nv];
+        let world = scene.build_world(false).expect("world");
+        let tissue = world.tissue();
+        let lower = &tissue.layers()[1];
+        let lattice = tissue.body().lattice();
+        let mut sites: Vec<[u32; 2]> = tissue
+            .connective_links()
+            .filter_map(|l| lattice.link_ends(l))
+            .map(|[a, b]| {
+                let e = if a.0 >= lower.first && a.0 < lower.first + lower.count { a.0 } else { b.0 };
+                let k = e - lower.first;
+                [k % nu, k / nu]
+            })
+            .collect();
+        sites.sort_unstable();
+        sites
+    };
+    let coarse = sites([256, 192]);
+    let fine = sites([512, 384]);
+    assert!(coarse.len() > 10_000, "{} fibres at 256 x 192", coarse.len());
+    let halved: Vec<[u32; 2]> = fine
+        .iter()
+        .map(|&[i, j]| {
+            assert!(
+                i.is_multiple_of(2) && j.is_multiple_of(2),
+                "a fibre at ({i}, {j}) of 512 x 384, off the sites"
+            );
+            [i / 2, j / 2]
+        })
+        .collect();
+    assert_eq!(halved, coarse, "the fibres of 512 x 384 are those of 256 x 192");
+}

@@ -118,6 +118,12 @@ fn density_out_of_range() {
 }
 
 #[test]
+fn fibre_spacing_below_zero() {
+    let e = load("min_gap: 0.0005)", "min_gap: 0.0005, spacing: -0.001)");
+    expect(e, "11:62", &["tissue.connective.spacing is -0.001", "at least 0 metres"]);
+}
+
+#[test]
 fn colour_out_of_range() {
     let e =
         load("(name: \"lower\", offset: 0.0)", "(name: \"lower\", offset: 0.0, color: (0.5, 1.5, 0.5, 1.0))");

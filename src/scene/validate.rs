@@ -472,7 +472,7 @@ fn connective(at: &FieldPath, c: &Connective, l: &LayerTissue) -> Result<(), Pro
     material(&at.f("material"), &c.material)?;
     let d = at.f("density");
     if !(finite(&d, c.density)? > 0.0 && c.density <= 1.0) {
-        return problem(&d, format!("is {}, expected a share of element pairs in (0, 1]", c.density));
+        return problem(&d, format!("is {}, expected a share of the fibres' sites in (0, 1]", c.density));
     }
     let g = at.f("min_gap");
     if !(finite(&g, c.min_gap)? >= 0.0 && c.min_gap < gap) {
@@ -482,6 +482,13 @@ fn connective(at: &FieldPath, c: &Connective, l: &LayerTissue) -> Result<(), Pro
                 "is {}, expected at least 0 and less than the gap between the layers ({gap} m)",
                 c.min_gap
             ),
+        );
+    }
+    let s = at.f("spacing");
+    if finite(&s, c.spacing)? < 0.0 {
+        return problem(
+            &s,
+            format!("is {}, expected at least 0 metres between the fibres' sites", c.spacing),
         );
     }
     Ok(())

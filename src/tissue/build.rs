@@ -158,6 +158,9 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
         if !(c.density > 0.0 && c.density <= 1.0) {
             return Err(invalid("connective.density", format!("{}: expected a share in (0, 1]", c.density)));
         }
+        if !(c.spacing.is_finite() && c.spacing >= 0.0) {
+            return Err(invalid("connective.spacing", format!("{}: expected at least 0 metres", c.spacing)));
+        }
         if !(c.min_gap >= 0.0 && c.min_gap < gap) {
             return Err(invalid(
                 "connective.min_gap",
@@ -181,6 +184,9 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
     let mut links = Vec::new();
     let mut kinds = Vec::new();
     let mut rest_len = Vec::new();
+    // The mean world length of the lowest layer's links along u and along v, with their counts: the
+    // element spacing the fibres' stride is measured against.
+    let mut along = [(0.0f64, 0u32); 2];
     for k in 0..nl {
         for j in 0..nv {
             for i in 0..nu {
@@ -197,6 +203,9 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
                     links.push(LinkSpec { a, b, rest: [du, 0.0, 0.0], scale: [du, du, d3] });
                     kinds.push(LinkKind::Layer((nl - 1 - k) as u8));
                     rest_len.push(d3);
+                    if k == 0 {
+                        along[0] = (along[0].0 + f64::from(d3), along[0].1 + 1);
+                    }
                 }
                 if j + 1 < nv {
                     let dv = sampling.v[j + 1] - sampling.v[j];
@@ -205,14 +214,21 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
                     links.push(LinkSpec { a, b, rest: [0.0, dv, 0.0], scale: [dv, dv, d3] });
                     kinds.push(LinkKind::Layer((nl - 1 - k) as u8));
                     rest_len.push(d3);
+                    if k == 0 {
+                        along[1] = (along[1].0 + f64::from(d3), along[1].1 + 1);
+                    }
                 }
             }
         }
     }
+    // One element in `stride` along each axis is a fibre's site (the same sites per square millimetre
+    // at every resolution finer than the fibres' spacing).
+    let mean = |(sum, n): (f64, u32)| if n > 0 { (sum / f64::from(n)) as f32 } else { f32::INFINITY };
+    let fibre_stride = connective.as_ref().map_or([1, 1], |c| c.stride(mean(along[0]), mean(along[1])));
     if let Some(c) = &connective {
         for j in 0..nv {
             for i in 0..nu {
-                if !c.joins(i as u32, j as u32) {
+                if !c.joins_at(i as u32, j as u32, fibre_stride) {
                     continue;
                 }
                 links.push(LinkSpec {
@@ -363,6 +379,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
         if nl == 2 { sheet as u32 } else { 0 },
         connective.as_ref().map(|c| c.min_gap).unwrap_or(0.0),
         spacing,
+        fibre_stride,
         super::Model::ChainMail,
         vec![true; n],
     ))
@@ -492,6 +509,7 @@ fn build_volume(s: &VolumeSpec, step_seconds: f32) -> Result<Tissue, TissueError
         0,
         0.0,
         spacing,
+        [1, 1],
         model,
         on_surface,
     ))
@@ -509,6 +527,7 @@ impl Tissue {
         sheet: u32,
         min_gap: f32,
         spacing: f32,
+        fibre_stride: [u32; 2],
         model: super::Model,
         on_surface: Vec<bool>,
     ) -> Self {
@@ -560,6 +579,7 @@ impl Tissue {
             link_kind,
             rest_len,
             fibre_sites: Vec::new(),
+            fibre_stride,
             sheet,
             min_gap,
             active: Vec::with_capacity(n),

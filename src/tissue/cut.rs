@@ -268,6 +268,7 @@ mod tests {
                 material: Material::relative(2.0, 0.5, 0.5),
                 density: 1.0,
                 min_gap: 0.0,
+                spacing: 0.0,
             }),
             pinned: Pinning::Boundary,
         });

@@ -21,10 +21,11 @@
 //! The force on a set of elements is the sum of their links' forces (links between two elements of the
 //! set cancel), read only from those elements: nothing here walks the body. Cutting a link costs its
 //! material's toughness times the area the blade cuts through: `t·w` in a layer (a stroke cuts the
-//! links it crosses), `A` in a volume, and for a fibre `L·s²/b`, its length times its cell's area
-//! over the blade's width `b` (at least the spacing `s`). A stroke severs every fibre within half the
-//! blade's width of it, `b·ρ/s²` of them per metre at a fibre density `ρ`, so it cuts `L·ρ` square
-//! metres per metre of its length, the same at every spacing.
+//! links it crosses), `A` in a volume, and for a fibre `L·k²s²/b`, its length times the area its site
+//! stands for (`k × k` cells of side `s`, one element in `k` along each axis being a site: see
+//! `ConnectiveSpec::stride`) over the blade's width `b` (at least the spacing `s`). A stroke severs
+//! every fibre within half the blade's width of it, `b·ρ/(k²s²)` of them per metre at a fibre density
+//! `ρ`, so it cuts `L·ρ` square metres per metre of its length, the same at every spacing.
 //!
 //! Must not import wgpu, winit or egui.
 
@@ -42,8 +43,9 @@ pub(crate) struct LinkFactors {
     /// Per link: `w / L` (layers on a surface) or `A / L` (fibres, volumes), in 1/1 or metres.
     factor: Vec<f32>,
     /// Per link: the cross-section a blade cuts through, as a factor of the thickness for layers on a
-    /// surface (`w`), in square metres in a volume, and for a fibre its length times its cell's area
-    /// (`L·s²`, cubic metres, divided by the blade's width when cut); then the fibre's cell side `s`.
+    /// surface (`w`), in square metres in a volume, and for a fibre its length times the area its site
+    /// stands for (`L·k²s²`, cubic metres, divided by the blade's width when cut); then that area's
+    /// side `k·s`.
     cut: Vec<[f32; 2]>,
     /// Per link: how much tissue it stands for ([`Tissue::link_extent`]).
     extent: Vec<f32>,
@@ -118,7 +120,10 @@ impl LinkFactors {
                     let side = perp / 8.0;
                     let area = side * side / density;
                     *f = area / len;
-                    *c = [len * side * side, side];
+                    // The cells its site stands for (one where every element is a site), and the
+                    // side of that square.
+                    let cells = tissue.fibre_stride[0] as f32 * tissue.fibre_stride[1] as f32;
+                    *c = [len * side * side * cells, side * cells.sqrt()];
                     *x = area;
                 }
                 Spring::Solid => {
@@ -291,7 +296,7 @@ impl Tissue {
         match spring(self, kind) {
             Spring::Membrane => m.toughness * m.thickness * c,
             // The fibre's share of the band the blade sweeps; under a blade narrower than the fibres'
-            // spacing each fibre stands for its cell's side of the stroke, as one row of them would.
+            // spacing each fibre stands for its site's side of the stroke, as one row of them would.
             Spring::Fibre => m.toughness * c / (2.0 * self.blade_half_width).max(side).max(f32::MIN_POSITIVE),
             Spring::Solid => m.toughness * c,
         }
@@ -390,6 +395,56 @@ mod tests {
         let expected = std::f32::consts::TAU * 1000.0 / 20.0f32.ln();
         for x in &k {
             assert!((x - expected).abs() < 1e-3 * expected, "{k:?} against {expected}");
+        }
+    }
+
+    /// Two layers joined by fibres whose sites are 1 mm apart: at 1, 0.5 and 0.25 mm spacing (one
+    /// element in 1, 2 and 4 a site) they have the same fibres, and together the fibres are as stiff
+    /// and cost as much to cut through.
+    #[test]
+    fn fibres_are_as_many_as_stiff_and_as_tough_at_any_spacing() {
+        use crate::tissue::ConnectiveSpec;
+        let m = Material { young_modulus: 2.0e6, thickness: 5.0e-4, ..Material::relative(1.3, 0.8, 0.3) };
+        let fibre = Material { young_modulus: 2.0e4, toughness: 500.0, ..Material::relative(2.0, 0.5, 0.5) };
+        let layer =
+            |name: &str, offset: f32| LayerSpec { name: name.into(), color: [1.0; 4], offset, material: m };
+        let totals: Vec<(usize, [u32; 2], f32, f32)> = [41, 81, 161]
+            .iter()
+            .map(|&n| {
+                let t = Tissue::build(&TissueSpec::Layered(LayeredSpec {
+                    surface: Surface::Plane { width: 0.04, depth: 0.04 },
+                    resolution: [n, n],
+                    u_coords: None,
+                    v_coords: None,
+                    layers: vec![layer("upper", 0.003), layer("lower", 0.0)],
+                    connective: Some(ConnectiveSpec {
+                        material: fibre,
+                        density: 0.5,
+                        min_gap: 0.0,
+                        spacing: 0.001,
+                    }),
+                    pinned: Pinning::Boundary,
+                }))
+                .unwrap_or_else(|e| panic!("{e}"));
+                let fibres: Vec<LinkId> = t.connective_links().collect();
+                let stiffness = fibres.iter().map(|&l| t.link_stiffness(l)).sum();
+                let toughness = fibres.iter().map(|&l| t.cut_energy(l)).sum();
+                (fibres.len(), t.fibre_stride, stiffness, toughness)
+            })
+            .collect();
+        assert_eq!(totals.iter().map(|t| t.1).collect::<Vec<_>>(), [[1, 1], [2, 2], [4, 4]]);
+        let (count, _, stiffness, toughness) = totals[0];
+        assert!(count > 500, "{count} fibres");
+        for &(c, stride, k, e) in &totals[1..] {
+            assert_eq!(c, count, "stride {stride:?}: the same sites");
+            assert!(
+                (k - stiffness).abs() < 0.05 * stiffness,
+                "stride {stride:?}: stiffness {k} against {stiffness}"
+            );
+            assert!(
+                (e - toughness).abs() < 0.05 * toughness,
+                "stride {stride:?}: cut energy {e} against {toughness}"
+            );
         }
     }
 

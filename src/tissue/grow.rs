@@ -213,6 +213,7 @@ mod tests {
                 material: crate::chainmail::Material::relative(2.0, 0.5, 0.5),
                 density,
                 min_gap: 0.0005,
+                spacing: 0.0,
             }),
             pinned: Pinning::Boundary,
         }))

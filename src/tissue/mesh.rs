@@ -151,9 +151,9 @@ impl Tissue {
     }
 
     /// The connective fibres in link order with where each stands at rest: its lower layer's element's
-    /// rest position along the surface's `u` and `v` (metres from the surface's first corner) and that
-    /// element's spacing to its nearest neighbours of the same layer along each (metres; the surface's
-    /// span where it has none).
+    /// rest position along the surface's `u` and `v` (metres from the surface's first corner) and the
+    /// spacing of the fibres' sites along each: that element's spacing to its nearest neighbours of the
+    /// same layer (metres; the surface's span where it has none) times the fibres' stride.
     pub(crate) fn rest_fibre_sites(&self) -> Vec<(LinkId, [f32; 4])> {
         let lattice = self.body.lattice();
         let rest = lattice.rest_positions();
@@ -185,7 +185,9 @@ impl Tissue {
                     }
                 }
             }
-            out.push((id, [r[0] - lo[0], r[k] - lo[k], gap[0], gap[1]]));
+            // A site stands for `stride` elements along each axis (`ConnectiveSpec::stride`).
+            let [su, sv] = self.fibre_stride.map(|s| s as f32);
+            out.push((id, [r[0] - lo[0], r[k] - lo[k], gap[0] * su, gap[1] * sv]));
         }
         out
     }

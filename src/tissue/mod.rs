@@ -262,6 +262,10 @@ pub struct Tissue {
     /// The connective fibres in link order, each with where it stands at rest (see
     /// [`crate::snapshot::Snapshot::fibre_sites`]): filled once, read by every snapshot.
     pub(crate) fibre_sites: Vec<(LinkId, [f32; 4])>,
+    /// How many elements apart the fibres' sites are along `u` and `v` (`ConnectiveSpec::stride`):
+    /// a fibre's site stands for their product of the interface's cells, `[1, 1]` where every element
+    /// is a site.
+    pub(crate) fibre_stride: [u32; 2],
     /// Elements per layer sheet (`nu × nv`) for layered tissue; pairs across layers differ by this.
     pub(crate) sheet: u32,
     pub(crate) min_gap: f32,

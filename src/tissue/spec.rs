@@ -35,23 +35,58 @@ pub struct ConnectiveSpec {
     /// The fibres' material (their rest length is the layer gap). Default: [`Material::default`].
     #[serde(default)]
     pub material: Material,
-    /// Share of element pairs joined, in `(0, 1]`. The pattern is deterministic: see
-    /// [`ConnectiveSpec::joins`]. Default 1 (every pair).
+    /// Share of the fibres' sites joined (every element pair, or one in [`ConnectiveSpec::stride`]),
+    /// in `(0, 1]`. The pattern is deterministic: see [`ConnectiveSpec::joins`]. Default 1 (every
+    /// site).
     #[serde(default = "one")]
     pub density: f32,
     /// The layers are never pushed closer than this, metres, in `[0, gap)` where `gap` is the
     /// difference of the two offsets. Default 0.
     #[serde(default)]
     pub min_gap: f32,
+    /// How far apart the fibres' sites are, metres across the surface, at least 0: where the element
+    /// spacing is finer, one element in `k` along each axis is a site (`k` the nearest whole number to
+    /// this over the spacing, see [`ConnectiveSpec::stride`]), so that a finer `resolution` joins the
+    /// layers with the same fibres per square millimetre, not more. 0: every element is a site.
+    /// Default [`FIBRE_SPACING`].
+    #[serde(default = "fibre_spacing")]
+    pub spacing: f32,
 }
+
+/// The default spacing of the fibres' sites: 0.3 mm, about the element spacing of the bundled 8 cm
+/// sheets at 256 x 192, the finest resolution their exercises are checked at across resolutions
+/// (`tests/exercise_resolution.rs`); at and below it every element is a site.
+pub const FIBRE_SPACING: f32 = 0.0003;
 
 fn one() -> f32 {
     1.0
 }
 
+fn fibre_spacing() -> f32 {
+    FIBRE_SPACING
+}
+
 impl ConnectiveSpec {
-    /// Whether the element pair at `(i, j)` (indices along u and v) has a fibre: a fixed, evenly
-    /// spread pattern (an ordered-dither threshold) so the same scene always gives the same fibres.
+    /// How many elements apart the fibres' sites are along `u` and `v` on a layer whose elements are
+    /// `du` and `dv` metres apart: the nearest whole number to [`ConnectiveSpec::spacing`] over each,
+    /// at least 1 (and at most `u32::MAX`).
+    pub fn stride(&self, du: f32, dv: f32) -> [u32; 2] {
+        [du, dv].map(|d| {
+            let k = (self.spacing / d).round();
+            if k >= 1.0 { k.min(u32::MAX as f32) as u32 } else { 1 }
+        })
+    }
+
+    /// Whether the element pair at `(i, j)` (indices along u and v) has a fibre, its sites `stride`
+    /// elements apart: the site at `(i, j) / stride` joined by [`ConnectiveSpec::joins`]'s pattern
+    /// (the same sites, in metres, at every resolution whose stride makes them so).
+    pub fn joins_at(&self, i: u32, j: u32, [ku, kv]: [u32; 2]) -> bool {
+        let (ku, kv) = (ku.max(1), kv.max(1));
+        i.is_multiple_of(ku) && j.is_multiple_of(kv) && self.joins(i / ku, j / kv)
+    }
+
+    /// Whether the site at `(i, j)` (indices along u and v) has a fibre: a fixed, evenly spread
+    /// pattern (an ordered-dither threshold) so the same scene always gives the same fibres.
     pub fn joins(&self, i: u32, j: u32) -> bool {
         if self.density >= 1.0 {
             return true;

@@ -34,6 +34,7 @@ pub fn two_layers(n: usize, surface: Surface, pinned: Pinning) -> LayeredSpec {
             material: Material { stiffness: 0.3, tear_ratio: None, ..Material::relative(2.0, 0.5, 0.5) },
             density: 1.0,
             min_gap: 0.0005,
+            spacing: 0.0,
         }),
         pinned,
     }

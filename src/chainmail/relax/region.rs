@@ -159,6 +159,7 @@ mod tests {
                 material: Material { stiffness: 0.3, tear_ratio: None, ..Material::relative(2.0, 0.5, 0.5) },
                 density: 1.0,
                 min_gap: 0.0005,
+                spacing: 0.0,
             }),
             pinned: Pinning::Boundary,
         };
