@@ -208,28 +208,13 @@ pub(super) struct Completion {
 }
 
 impl Body {
-    /// Completes the normal pass of a body with normal pairs (see the module's comment). A fixed
-    /// element that would have to move raises `excess` (the normal
-    /// coordinate) by how far; with `measure` `None` the pass stops at the first.
-    pub(super) fn complete_pairs(
-        &mut self,
-        ws: &mut Workspace,
-        seeds: &[u32],
-        measure: Option<Measure>,
-        excess: &mut [f32; 3],
-    ) -> Completion {
-        let n = self.pos.len();
-        let mut tally = Tally {
-            moves: 0,
-            cap: (MOVES_PER_ELEMENT * n).max(MIN_MOVES),
-            blocked: false,
-            stop: false,
-            unmet: 0.0,
-        };
+    /// The links' bounds on the normal coordinate per slot class, widened and as they are
+    /// (`[lo - tol, hi + tol, lo, hi]`), taken out of the workspace (give it back to `ws.class_z`): a
+    /// class's bounds never change (a new box is a new class, and the table is rebuilt only under a new
+    /// revision); padded with bounds that always hold to a power of two (the fast path masks a class
+    /// with it).
+    pub(super) fn class_z_table(&self, ws: &mut Workspace) -> Vec<[f32; 4]> {
         let mut class_z = std::mem::take(&mut ws.class_z);
-        // The links' bounds per slot class, widened and as they are (a class's bounds never change:
-        // a new box is a new class, and the table is rebuilt only under a new revision), padded with
-        // bounds that always hold to a power of two (the fast path masks a class with it).
         let key = (self.revision, self.classes.len());
         let len = self.classes.len().next_power_of_two();
         if ws.class_z_key != key || class_z.len() != len {
@@ -242,8 +227,27 @@ impl Body {
             class_z.resize(len, [f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY]);
             ws.class_z_key = key;
         }
-        // A lift's rigid elements rise at once; their rim is checked with what the lists moved.
-        self.raise_rigid(ws, seeds, &class_z);
+        class_z
+    }
+
+    /// Completes the normal pass of a body with normal pairs (see the module's comment). A fixed
+    /// element that would have to move raises `excess` (the normal
+    /// coordinate) by how far; with `measure` `None` the pass stops at the first.
+    pub(super) fn complete_pairs(
+        &mut self,
+        ws: &mut Workspace,
+        measure: Option<Measure>,
+        excess: &mut [f32; 3],
+    ) -> Completion {
+        let n = self.pos.len();
+        let mut tally = Tally {
+            moves: 0,
+            cap: (MOVES_PER_ELEMENT * n).max(MIN_MOVES),
+            blocked: false,
+            stop: false,
+            unmet: 0.0,
+        };
+        let class_z = self.class_z_table(ws);
         let mut bits = std::mem::take(&mut ws.pair_bits);
         bits.clear();
         bits.resize(n.div_ceil(64), 0);

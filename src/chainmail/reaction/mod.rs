@@ -345,6 +345,41 @@ impl Body {
         ws.next_generation();
         let width = self.width;
         let n = self.pos.len();
+        let (head, tail) = (&mut head[..width], &mut tail[..width]);
+        head.fill(0);
+        // Every seed moves first, sponsoring itself, and enters every list (in the seeds' order).
+        let mut seeded = 0;
+        {
+            let mut m = Moving {
+                pos: &mut self.pos[..n],
+                old: &mut ws.old[..n],
+                stamp: &mut ws.stamp[..n],
+                sponsor: &mut ws.sponsor[..n],
+                moved: &mut ws.moved,
+                lists: &mut ws.lists[..n * width],
+                tail: &mut *tail,
+                g: ws.generation,
+            };
+            for (&s, &g) in r.seeds.iter().zip(r.goals) {
+                let s = s as usize;
+                if s >= n || m.has_moved(s) {
+                    continue;
+                }
+                m.record(s, g, s);
+                for t in 0..width {
+                    m.lists[t * n + seeded] = s as u32;
+                }
+                seeded += 1;
+            }
+        }
+        // The normal pass of a lift: its rigid elements rise with the seeds before the lists run
+        // (`lift.rs`), so that the lists stop at them rather than carry the seeds' rise through the
+        // taut tent element by element; their rim is checked by the completion.
+        if MASK == 0b100 && self.pairs.any() {
+            let class_z = self.class_z_table(ws);
+            self.raise_rigid(ws, r.seeds, &class_z);
+            ws.class_z = class_z;
+        }
         // Every per-element slice cut to exactly `n`, so one bounds check on an index serves them all.
         let (nbrs, classes, slot_class, flags) =
             (&self.slot_nbr[..n * width], &self.classes[..], &self.slot_class[..n * width], &self.flags[..n]);
@@ -368,8 +403,6 @@ impl Body {
             offs,
             width,
         };
-        let (head, tail) = (&mut head[..width], &mut tail[..width]);
-        head.fill(0);
         let mut m = Moving {
             pos: &mut self.pos[..n],
             old: &mut ws.old[..n],
@@ -380,19 +413,6 @@ impl Body {
             tail,
             g: ws.generation,
         };
-        // Every seed moves first, sponsoring itself, and enters every list (in the seeds' order).
-        let mut seeded = 0;
-        for (&s, &g) in r.seeds.iter().zip(r.goals) {
-            let s = s as usize;
-            if s >= n || m.has_moved(s) {
-                continue;
-            }
-            m.record(s, g, s);
-            for t in 0..width {
-                m.lists[t * n + seeded] = s as u32;
-            }
-            seeded += 1;
-        }
         m.tail.fill(seeded);
 
         let mut patterns = Patterns::default();
@@ -466,7 +486,7 @@ impl Body {
         // The normal pass of a body with normal pairs: the lists above kept each element within its
         // sponsor's link; the pairs (and the links the pairs' moves disturb) are met after them.
         if MASK == 0b100 && self.pairs.any() && (!blocked || r.measure.is_some()) {
-            let done = self.complete_pairs(ws, r.seeds, r.measure, &mut excess);
+            let done = self.complete_pairs(ws, r.measure, &mut excess);
             blocked |= done.blocked;
             // A bound of a moved element left outside: the limits' repair hears of it.
             if !blocked {
