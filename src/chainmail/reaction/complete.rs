@@ -230,12 +230,14 @@ impl Body {
         class_z
     }
 
-    /// Completes the normal pass of a body with normal pairs (see the module's comment). A fixed
-    /// element that would have to move raises `excess` (the normal
-    /// coordinate) by how far; with `measure` `None` the pass stops at the first.
+    /// Completes the normal pass of a body with normal pairs (see the module's comment), raising a
+    /// lift's rigid elements first when `raise` gives the seeds (`lift.rs`; otherwise they rose before
+    /// the lists). A fixed element that would have to move raises `excess` (the normal coordinate) by
+    /// how far; with `measure` `None` the pass stops at the first.
     pub(super) fn complete_pairs(
         &mut self,
         ws: &mut Workspace,
+        raise: Option<&[u32]>,
         measure: Option<Measure>,
         excess: &mut [f32; 3],
     ) -> Completion {
@@ -248,6 +250,10 @@ impl Body {
             unmet: 0.0,
         };
         let class_z = self.class_z_table(ws);
+        // A lift's rigid elements rise now if they did not before the lists (from these seeds).
+        if let Some(seeds) = raise {
+            self.raise_rigid(ws, seeds, &class_z);
+        }
         let mut bits = std::mem::take(&mut ws.pair_bits);
         bits.clear();
         bits.resize(n.div_ceil(64), 0);

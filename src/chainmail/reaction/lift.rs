@@ -22,7 +22,10 @@
 //! heights (each hangs from the seeds by bounds met exactly) but as many more listed moves for the
 //! completion to check and the disturbed region to take in. (Raised after the lists until 2026-11-29:
 //! the careful exercise's lists then moved about 28 elements a held element, each step of a lift, 3 500
-//! at 512 x 384; the step's mean fell by 13-15 % at 256 x 192 and 512 x 384.)
+//! at 512 x 384; the step's mean fell by 13-15 % at 256 x 192 and 512 x 384.) Only a reaction that
+//! goes the whole way is expected to, though: the raise waits for the lists in a search's unmeasured
+//! tries (which stop at the first fixed element the lists meet) and wherever the last search from the
+//! same seeds was stopped short (see [`Lift::raises_first`]).
 //!
 //! Whatever else moved a raised element since (relaxation, contact, the limits' repair) leaves the
 //! raise valid: relative places are kept and every bound leaving the set is checked. It may then move
@@ -122,6 +125,8 @@ struct Memo {
     rise: f32,
     rose: Vec<u64>,
     used: u64,
+    /// The last search from these seeds moved them their whole way (no fixed element stopped it).
+    whole: bool,
 }
 
 /// The rigid elements' scratch and memory, in the workspace.
@@ -159,6 +164,22 @@ pub(crate) struct Lift {
 }
 
 impl Lift {
+    /// Whether a reaction from `seeds` raises its rigid elements before Gibson's lists run: when the
+    /// last search from them moved them their whole way. A pull the pins stop (a search that shortens
+    /// it) raises after the lists, which meet the fixed elements and measure them before the raise
+    /// would stop the lists short of them (the completion then walked the whole tent to measure them:
+    /// the durotomy's last pull at 256 x 192 took 2.5 times as long).
+    pub(crate) fn raises_first(&self, seeds: &[u32]) -> bool {
+        self.enabled && self.memos.iter().any(|m| m.whole && m.seeds == seeds)
+    }
+
+    /// Notes that a search from `seeds` moved nothing (a fixed element stopped every share of it).
+    pub(crate) fn stopped(&mut self, seeds: &[u32]) {
+        for m in self.memos.iter_mut().filter(|m| m.seeds == seeds) {
+            m.whole = false;
+        }
+    }
+
     /// Forgets this reaction's raise (its elements are back where they were, or accepted).
     pub(crate) fn clear_reaction(&mut self) {
         if !self.raised.is_empty() {
@@ -367,7 +388,7 @@ impl Body {
     }
 
     /// Remembers, after a reaction that stands, which elements rose with its seeds (`seeds`: the ones
-    /// that moved).
+    /// that moved), and whether they moved their whole way (`whole`: see [`Lift::raises_first`]).
     ///
     /// An element is remembered as rigid only if it rose with the seeds and so did the eight around it:
     /// a margin of one element keeps the raise off the tent's foot, where relaxation loosens the bounds
@@ -377,7 +398,7 @@ impl Body {
     /// instructions with 8 x 8 blocks, 1 372 M with this margin, 1 821 M with none and 1 440 M with
     /// two; raising runs of elements at once and skipping elements with no fibre bound then took it to
     /// 1 312 M.)
-    pub(crate) fn record_rigid(&self, ws: &mut Workspace, seeds: &[u32]) {
+    pub(crate) fn record_rigid(&self, ws: &mut Workspace, seeds: &[u32], whole: bool) {
         if !ws.lift.enabled {
             return;
         }
@@ -398,6 +419,7 @@ impl Body {
         memo.seeds.clear();
         memo.seeds.extend_from_slice(seeds);
         memo.used = tick;
+        memo.whole = whole;
         memo.shape = self.shape;
         memo.revision = self.revision;
         memo.rise = rise;

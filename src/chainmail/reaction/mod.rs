@@ -165,8 +165,9 @@ impl Body {
         let result = self.search(ws, &mut scratch, seeds, full, mask);
         if result.fraction == 0.0 {
             ws.next_generation();
+            ws.lift.stopped(&scratch.free);
         } else if mask == Pass::Normal.mask() {
-            self.record_rigid(ws, &scratch.free);
+            self.record_rigid(ws, &scratch.free, result.fraction >= 1.0);
         }
         if result.moved > 0 {
             self.note_motion();
@@ -372,10 +373,14 @@ impl Body {
                 seeded += 1;
             }
         }
-        // The normal pass of a lift: its rigid elements rise with the seeds before the lists run
-        // (`lift.rs`), so that the lists stop at them rather than carry the seeds' rise through the
-        // taut tent element by element; their rim is checked by the completion.
-        if MASK == 0b100 && self.pairs.any() {
+        // The normal pass of a lift that went its whole way last time: its rigid elements rise with
+        // the seeds before the lists run (`lift.rs`), so that the lists stop at them rather than carry
+        // the seeds' rise through the taut tent element by element; their rim is checked by the
+        // completion. Elsewhere (a search's unmeasured tries, a pull the pins stopped short last time)
+        // the raise waits for the lists, which meet the fixed elements first.
+        let raise_first =
+            MASK == 0b100 && self.pairs.any() && r.measure.is_some() && ws.lift.raises_first(r.seeds);
+        if raise_first {
             let class_z = self.class_z_table(ws);
             self.raise_rigid(ws, r.seeds, &class_z);
             ws.class_z = class_z;
@@ -486,7 +491,7 @@ impl Body {
         // The normal pass of a body with normal pairs: the lists above kept each element within its
         // sponsor's link; the pairs (and the links the pairs' moves disturb) are met after them.
         if MASK == 0b100 && self.pairs.any() && (!blocked || r.measure.is_some()) {
-            let done = self.complete_pairs(ws, r.measure, &mut excess);
+            let done = self.complete_pairs(ws, (!raise_first).then_some(r.seeds), r.measure, &mut excess);
             blocked |= done.blocked;
             // A bound of a moved element left outside: the limits' repair hears of it.
             if !blocked {
