@@ -148,8 +148,18 @@ impl Workspace {
 
     /// Puts the elements the current deformation moved back where they were.
     pub(crate) fn rollback(&mut self, pos: &mut [[f32; 3]]) {
-        for &i in &self.lift.raised {
-            pos[i as usize] = self.old[i as usize];
+        // The raised elements the completion did not list (those it did are in the moved list).
+        if self.lift.raised {
+            for (w, &x) in self.lift.unlisted.iter().enumerate() {
+                let mut x = x;
+                while x != 0 {
+                    let i = w * 64 + x.trailing_zeros() as usize;
+                    x &= x - 1;
+                    if let (Some(p), Some(&o)) = (pos.get_mut(i), self.old.get(i)) {
+                        *p = o;
+                    }
+                }
+            }
         }
         for &i in &self.moved {
             pos[i as usize] = self.old[i as usize];
