@@ -135,3 +135,42 @@ pub enum Edge {
     /// `v = 1`.
     VMax,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fibres(spacing: f32) -> ConnectiveSpec {
+        ConnectiveSpec { material: Material::default(), density: 0.5, min_gap: 0.0, spacing }
+    }
+
+    /// The stride is the nearest whole number of elements to the spacing along each axis, never 0
+    /// (every element a site at and below the spacing, and for a spacing of 0), and a spacing beyond
+    /// any count of elements leaves one site per sheet rather than overflowing.
+    #[test]
+    fn the_stride_rounds_the_spacing_to_elements() {
+        let c = fibres(FIBRE_SPACING);
+        assert_eq!(c.stride(0.08 / 511.0, 0.06 / 383.0), [2, 2], "512 x 384 of an 8 x 6 cm sheet");
+        assert_eq!(c.stride(0.08 / 255.0, 0.06 / 191.0), [1, 1], "256 x 192");
+        assert_eq!(c.stride(0.08 / 63.0, 0.06 / 47.0), [1, 1], "64 x 48");
+        assert_eq!(c.stride(0.08 / 1023.0, 0.0003), [4, 1], "each axis on its own");
+        assert_eq!(fibres(0.0).stride(1e-6, 1e-6), [1, 1], "0: every element");
+        assert_eq!(fibres(1e30).stride(1e-6, 1e-6), [u32::MAX, u32::MAX], "beyond any sheet");
+        assert_eq!(fibres(1e30).stride(f32::INFINITY, f32::INFINITY), [1, 1], "no links along an axis");
+    }
+
+    /// With a stride, only the elements on the stride's lattice are sites, and the site at `(i, j) · k`
+    /// is joined where the unstrided pattern joins `(i, j)`.
+    #[test]
+    fn strided_sites_follow_the_pattern() {
+        let c = fibres(FIBRE_SPACING);
+        for j in 0..40 {
+            for i in 0..40 {
+                assert_eq!(c.joins_at(i, j, [1, 1]), c.joins(i, j));
+                let on = i.is_multiple_of(2) && j.is_multiple_of(3);
+                assert_eq!(c.joins_at(i, j, [2, 3]), on && c.joins(i / 2, j / 3), "({i}, {j})");
+            }
+        }
+        assert!(c.joins_at(0, 0, [u32::MAX, u32::MAX]) == c.joins(0, 0));
+    }
+}
