@@ -5,6 +5,7 @@
 
 use crate::chainmail::body::{FIXED, SlotClass};
 use crate::chainmail::coords::clamp;
+use crate::chainmail::workspace::Workspace;
 
 /// Longest run moved at once.
 pub(super) const RUN: usize = 1024;
@@ -57,7 +58,28 @@ pub(super) struct Moving<'a> {
     pub(super) g: u32,
 }
 
-impl Moving<'_> {
+impl<'a> Moving<'a> {
+    /// A chain reaction's writes: the body's positions `pos` and the workspace's arrays for its
+    /// elements, with `width` candidate lists ending at `tail`.
+    pub(super) fn of(
+        pos: &'a mut [[f32; 3]],
+        ws: &'a mut Workspace,
+        width: usize,
+        tail: &'a mut [usize],
+    ) -> Self {
+        let n = pos.len();
+        Moving {
+            pos,
+            old: &mut ws.old[..n],
+            stamp: &mut ws.stamp[..n],
+            sponsor: &mut ws.sponsor[..n],
+            moved: &mut ws.moved,
+            lists: &mut ws.lists[..n * width],
+            tail,
+            g: ws.generation,
+        }
+    }
+
     /// Elements in the body.
     #[inline(always)]
     pub(super) fn n(&self) -> usize {

@@ -351,16 +351,7 @@ impl Body {
         // Every seed moves first, sponsoring itself, and enters every list (in the seeds' order).
         let mut seeded = 0;
         {
-            let mut m = Moving {
-                pos: &mut self.pos[..n],
-                old: &mut ws.old[..n],
-                stamp: &mut ws.stamp[..n],
-                sponsor: &mut ws.sponsor[..n],
-                moved: &mut ws.moved,
-                lists: &mut ws.lists[..n * width],
-                tail: &mut *tail,
-                g: ws.generation,
-            };
+            let mut m = Moving::of(&mut self.pos[..n], ws, width, &mut *tail);
             for (&s, &g) in r.seeds.iter().zip(r.goals) {
                 let s = s as usize;
                 if s >= n || m.has_moved(s) {
@@ -388,8 +379,10 @@ impl Body {
         // Every per-element slice cut to exactly `n`, so one bounds check on an index serves them all.
         let (nbrs, classes, slot_class, flags) =
             (&self.slot_nbr[..n * width], &self.classes[..], &self.slot_class[..n * width], &self.flags[..n]);
-        // Interior grid elements find their neighbours by offset (`Slices::neighbour`).
-        let (offs, interior, across): (&[isize], &[u8], &[u8]) = match &ws.stencil {
+        // Interior grid elements find their neighbours by offset (`Slices::neighbour`). (The stencil
+        // is taken out of the workspace while the lists run, and given back after them.)
+        let stencil = ws.stencil.take();
+        let (offs, interior, across): (&[isize], &[u8], &[u8]) = match &stencil {
             Some(st) if st.interior.len() == n && st.across.len() == n => {
                 (&st.offs, &st.interior[..n], &st.across[..n])
             }
@@ -408,16 +401,7 @@ impl Body {
             offs,
             width,
         };
-        let mut m = Moving {
-            pos: &mut self.pos[..n],
-            old: &mut ws.old[..n],
-            stamp: &mut ws.stamp[..n],
-            sponsor: &mut ws.sponsor[..n],
-            moved: &mut ws.moved,
-            lists: &mut ws.lists[..n * width],
-            tail,
-            g: ws.generation,
-        };
+        let mut m = Moving::of(&mut self.pos[..n], ws, width, tail);
         m.tail.fill(seeded);
 
         let mut patterns = Patterns::default();
@@ -488,6 +472,7 @@ impl Body {
                 break;
             }
         }
+        ws.stencil = stencil;
         // The normal pass of a body with normal pairs: the lists above kept each element within its
         // sponsor's link; the pairs (and the links the pairs' moves disturb) are met after them.
         if MASK == 0b100 && self.pairs.any() && (!blocked || r.measure.is_some()) {
