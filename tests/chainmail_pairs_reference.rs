@@ -260,3 +260,44 @@ fn lift_both_ways(spec: dissect::tissue::LayeredSpec, patch: &[ElementId], steps
     }
     (raised, worst)
 }
+
+/// A lift whose rigid elements rose first (the last lift from the same seeds went its whole way) and
+/// which the pins then block is rolled back exactly: the raise keeps only the raised elements'
+/// heights before (`Lift::old_z`), and putting them back must restore every position to the bit.
+/// Checked through the search: the blocked reach's share of the move, asked for directly from the
+/// same state (on a copy that never tried the blocked reach), gives the same positions.
+#[test]
+fn a_blocked_raise_rolls_back_exactly() {
+    let n = 64;
+    let spec = common::two_layers(n, Surface::Plane { width: 0.04, depth: 0.04 }, Pinning::Boundary);
+    let tissue = Tissue::build(&TissueSpec::Layered(spec)).expect("tissue");
+    let mut body = tissue.body().clone();
+    let mut ws = Workspace::new(&body);
+    ws.set_rigid_blocks(true);
+    let patch: Vec<ElementId> =
+        (31..34).flat_map(|j| (31..34).map(move |i| ElementId((i + n * j) as u32))).collect();
+    let goals_up = |body: &Body, dz: f32| -> Vec<[f32; 3]> {
+        patch.iter().map(|&x| body.positions()[x.index()]).map(|q| [q[0], q[1], q[2] + dz]).collect()
+    };
+    // Lifts that go their whole way, until the raise moves most of the tent at once.
+    for step in 1..=30 {
+        let goals = goals_up(&body, 0.0001);
+        let r = body.deform_group(&mut ws, &patch, &goals, Pass::Normal).expect("lift");
+        assert!(r.fraction >= 1.0, "step {step}: the lift was shortened");
+    }
+    assert!(ws.raised_unlisted() > 500, "the raise moved only {} elements", ws.raised_unlisted());
+    // A reach far past what the pins allow: raised first, blocked, rolled back, shortened.
+    let (mut copy, mut copy_ws) = (body.clone(), ws.clone());
+    let start: Vec<[f32; 3]> = goals_up(&body, 0.0);
+    let goals = goals_up(&body, 0.05);
+    let r = body.deform_group(&mut ws, &patch, &goals, Pass::Normal).expect("reach");
+    assert!(r.fraction > 0.0 && r.fraction < 1.0, "the reach went {} of its way", r.fraction);
+    assert!(r.attempts > 1, "the reach was not tried whole first");
+    // The share it went, asked for at once.
+    let t = r.fraction;
+    let short: Vec<[f32; 3]> =
+        start.iter().zip(&goals).map(|(p, g)| [0, 1, 2].map(|c| p[c] + t * (g[c] - p[c]))).collect();
+    let q = copy.deform_group(&mut copy_ws, &patch, &short, Pass::Normal).expect("short reach");
+    assert_eq!(q.fraction, 1.0, "the short reach was shortened");
+    assert!(same(body.positions(), copy.positions()), "the rolled-back raise left positions changed");
+}

@@ -13,7 +13,8 @@ pub struct Workspace {
     /// `stamp[i] == generation` when element `i` moved in the current deformation.
     pub(crate) stamp: Vec<u32>,
     pub(crate) generation: u32,
-    /// Position before the current deformation, valid where stamped.
+    /// Position before the current deformation, valid where stamped (but for the elements a lift
+    /// raised and nothing moved again: their heights before are in `lift.old_z`).
     pub(crate) old: Vec<[f32; 3]>,
     /// The sponsor of each moved element (itself for the source), valid where stamped.
     pub(crate) sponsor: Vec<u32>,
@@ -129,12 +130,6 @@ impl Workspace {
         super::reaction::has_bit(&self.lift.unlisted, i)
     }
 
-    /// An element's position before the last deformation, if it moved (raised as a rigid element too).
-    pub fn old_position(&self, e: ElementId) -> Option<[f32; 3]> {
-        let i = e.index();
-        (self.stamp.get(i) == Some(&self.generation) && self.generation != 0).then(|| self.old[i])
-    }
-
     /// Starts a new deformation: a fresh stamp, an empty moved list.
     pub(crate) fn next_generation(&mut self) {
         if self.generation == u32::MAX {
@@ -155,8 +150,9 @@ impl Workspace {
                 while x != 0 {
                     let i = w * 64 + x.trailing_zeros() as usize;
                     x &= x - 1;
-                    if let (Some(p), Some(&o)) = (pos.get_mut(i), self.old.get(i)) {
-                        *p = o;
+                    // (Raised along the normal only: the height before is all that changed.)
+                    if let (Some(p), Some(&z)) = (pos.get_mut(i), self.lift.old_z.get(i)) {
+                        p[2] = z;
                     }
                 }
             }

@@ -197,6 +197,9 @@ struct Moves<'a> {
     moved: &'a mut Vec<u32>,
     /// Raised elements not in `moved` yet, a bit each, and how many (`lift.rs`).
     unlisted: (&'a mut [u64], &'a mut usize),
+    /// The raised elements' heights before the raise (`Lift::old_z`: their old positions but for
+    /// the height are where they are).
+    old_z: &'a [f32],
     g: u32,
 }
 
@@ -272,6 +275,7 @@ impl Body {
             sponsor: &mut ws.sponsor[..n],
             moved: &mut ws.moved,
             unlisted: (&mut ws.lift.unlisted, &mut ws.lift.unlisted_count),
+            old_z: &ws.lift.old_z,
             g: ws.generation,
         };
         let b = Bounds {
@@ -350,7 +354,7 @@ impl Run<'_> {
         let stamp = &mut m.stamp[..n];
         let sponsor = &mut m.sponsor[..n];
         let moved = &mut *m.moved;
-        let (unlisted, unlisted_count) = (&mut *m.unlisted.0, &mut *m.unlisted.1);
+        let (unlisted, unlisted_count, old_z) = (&mut *m.unlisted.0, &mut *m.unlisted.1, m.old_z);
         let bits = &mut *self.bits;
         let (mut queue, mut tally) = (*self.queue, *self.tally);
         while tally.goes_on() {
@@ -390,7 +394,7 @@ impl Run<'_> {
                     if over.abs() <= tol {
                         continue;
                     }
-                    let wx = if stamp[x] == g { old[x][2] } else { zx };
+                    let wx = Before { stamp, old, unlisted, old_z, g }.z(x, zx);
                     let before = outside_by(wx - zy, lo, hi);
                     if over.abs() <= before.abs() + tol {
                         tally.unmet = tally.unmet.max(over.abs());
@@ -410,7 +414,7 @@ impl Run<'_> {
                     }
                 }
                 let mut m =
-                    Moves { pos, old, stamp, sponsor, moved, unlisted: (unlisted, unlisted_count), g };
+                    Moves { pos, old, stamp, sponsor, moved, unlisted: (unlisted, unlisted_count), old_z, g };
                 let met = meet(&mut m, flags, Bound { x, y, lo, hi });
                 tally.count(met, (&mut queue, bits), self.measure, self.excess);
                 if tally.stop {
@@ -482,6 +486,31 @@ fn outside_by(d: f32, lo: f32, hi: f32) -> f32 {
     }
 }
 
+/// Where the elements were before this reaction, as the completion reads it: an element's old
+/// position where it moved (`stamp` at `g`), the height before the raise where it was raised and not
+/// listed since (`unlisted`, `old_z`).
+struct Before<'a> {
+    stamp: &'a [u32],
+    old: &'a [[f32; 3]],
+    unlisted: &'a [u64],
+    old_z: &'a [f32],
+    g: u32,
+}
+
+impl Before<'_> {
+    /// Element `i`'s height before this reaction, `z` its height now.
+    #[inline(always)]
+    fn z(&self, i: usize, z: f32) -> f32 {
+        if self.stamp.get(i) != Some(&self.g) {
+            z
+        } else if super::has_bit(self.unlisted, i) {
+            self.old_z.get(i).copied().unwrap_or(z)
+        } else {
+            self.old.get(i).map_or(z, |o| o[2])
+        }
+    }
+}
+
 /// Meets a bound found outside (see the module's comment): the end this reaction moved less in the
 /// direction of the excess follows the other. (Out of the loops: most bounds they test hold.)
 #[inline(never)]
@@ -494,7 +523,8 @@ fn meet(m: &mut Moves<'_>, flags: &[u8], Bound { x, y, lo, hi }: Bound) -> Met {
     if over.abs() <= tol {
         return Met::Held;
     }
-    let was = |i: usize, p: f32| if m.stamp[i] == m.g { m.old[i][2] } else { p };
+    let before = Before { stamp: m.stamp, old: m.old, unlisted: m.unlisted.0, old_z: m.old_z, g: m.g };
+    let was = |i: usize, p: f32| before.z(i, p);
     let (wx, wy) = (was(x, zx), was(y, zy));
     let before = outside_by(wx - wy, lo, hi);
     // No worse than before the reaction: not this reaction's doing (the limits' repair sees to it).
@@ -516,8 +546,11 @@ fn meet(m: &mut Moves<'_>, flags: &[u8], Bound { x, y, lo, hi }: Bound) -> Met {
     } else if let Some(w) = m.unlisted.0.get_mut(f / 64)
         && *w & (1 << (f % 64)) != 0
     {
-        // Raised as a rigid element, and now moved on its own: listed as moved from where it was.
+        // Raised as a rigid element, and now moved on its own: listed as moved from where it was
+        // (below its place now by the raise, which moved its height only).
         *w &= !(1 << (f % 64));
+        let p = m.pos[f];
+        m.old[f] = [p[0], p[1], m.old_z.get(f).copied().unwrap_or(p[2])];
         *m.unlisted.1 -= 1;
         m.sponsor[f] = leader as u32;
         m.moved.push(f as u32);
