@@ -73,3 +73,4 @@ pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};
 pub use schedule::worker_pool;
 pub use simd::{SIMD_ENV, SimdLevel};
 pub use workspace::Workspace;
+pub(crate) use workspace::touched;

@@ -583,8 +583,8 @@ impl Tissue {
             sheet,
             min_gap,
             active: Vec::with_capacity(n),
-            in_active: vec![false; n],
-            last_move: vec![0.0; n],
+            in_active: crate::chainmail::touched(n, false),
+            last_move: crate::chainmail::touched(n, 0.0),
             region_scratch: Vec::with_capacity(n),
             region_bits: Vec::with_capacity(n.div_ceil(64)),
             moved_bits: vec![0; n.div_ceil(64)],
@@ -611,6 +611,7 @@ impl Tissue {
         };
         tissue.forces = super::force::LinkFactors::of(&tissue);
         tissue.growth.fit(tissue.body.lattice());
+        tissue.repair.fit(n);
         tissue.fibre_sites = tissue.rest_fibre_sites();
         tissue
     }

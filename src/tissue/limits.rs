@@ -93,11 +93,12 @@ pub(crate) struct Repair {
 impl Repair {
     pub(crate) fn fit(&mut self, n: usize) {
         if self.from.len() != n {
-            self.from = vec![[0.0; 3]; n];
-            self.stamps = vec![0; n];
-            self.queued = vec![false; n];
-            self.bounces = vec![0; n];
-            self.rank = vec![0; n];
+            use crate::chainmail::touched;
+            self.from = touched(n, [0.0; 3]);
+            self.stamps = touched(n, 0);
+            self.queued = touched(n, false);
+            self.bounces = touched(n, 0);
+            self.rank = touched(n, 0);
             self.stamp = 1;
             self.suspects.clear();
             self.carry.clear();

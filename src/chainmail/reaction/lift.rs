@@ -194,6 +194,23 @@ impl Lift {
         }
     }
 
+    /// Sizes the per-element scratch for `body` (when a workspace is fitted, not at the first raise).
+    pub(crate) fn fit(&mut self, body: &Body) {
+        let n = body.pos.len();
+        let words = n.div_ceil(64);
+        if self.unlisted.len() != words {
+            self.unlisted = vec![0; words];
+        }
+        if self.old_z.len() != n {
+            self.old_z = crate::chainmail::workspace::touched(n, 0.0);
+        }
+        if Grid::of(body).is_some_and(|g| g.nz == 2) && self.fibre_z.len() != n {
+            self.fibre_z = vec![[f32::NEG_INFINITY, f32::INFINITY]; n];
+            self.fibre_bits = vec![0; words];
+            self.fibre_key = vec![(0, 0); words];
+        }
+    }
+
     /// Forgets this reaction's raise (its elements are back where they were, or accepted).
     pub(crate) fn clear_reaction(&mut self) {
         if self.raised {
