@@ -70,6 +70,7 @@ impl Workspace {
             self.old = touched(n, [0.0; 3]);
             self.sponsor = touched(n, 0);
             self.next = touched(n, [0.0; 3]);
+            // (Written and emptied: its capacity is mapped now, not as the steps push.)
             self.moved = touched(n, 0);
             self.moved.clear();
         }

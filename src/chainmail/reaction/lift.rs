@@ -204,7 +204,9 @@ impl Lift {
         if self.old_z.len() != n {
             self.old_z = crate::chainmail::workspace::touched(n, 0.0);
         }
-        if Grid::of(body).is_some_and(|g| g.nz == 2) && self.fibre_z.len() != n {
+        if Grid::of(body).is_some_and(|g| g.nz == 2)
+            && (self.fibre_z.len() != n || self.fibre_key.len() != words)
+        {
             self.fibre_z = vec![[f32::NEG_INFINITY, f32::INFINITY]; n];
             self.fibre_bits = vec![0; words];
             self.fibre_key = vec![(0, 0); words];
@@ -322,12 +324,8 @@ impl Body {
         if !any {
             return;
         }
-        if lift.unlisted.len() != words {
-            lift.unlisted = vec![0; words];
-        }
-        if lift.old_z.len() != n {
-            lift.old_z = vec![0.0; n];
-        }
+        // (Sized when the workspace was fitted: this only makes sure.)
+        lift.fit(self);
         let g = ws.generation;
         let (pos, old_z, stamp) = (&mut self.pos[..n], &mut lift.old_z[..n], &mut ws.stamp[..n]);
         let mut raised = 0usize;
@@ -372,11 +370,6 @@ impl Body {
         let (slot_nbr, slot_class) = (&self.slot_nbr[..n * w_slots], &self.slot_class[..n * w_slots]);
         let layer = grid.nx * grid.ny;
         let key = (self.revision, self.boxes_epoch);
-        if grid.nz == 2 && (lift.fibre_z.len() != n || lift.fibre_key.len() != words) {
-            lift.fibre_z = vec![[f32::NEG_INFINITY, f32::INFINITY]; n];
-            lift.fibre_bits = vec![0; words];
-            lift.fibre_key = vec![(0, 0); words];
-        }
         let il = layer as isize;
         let rigid = &lift.rigid[..];
         for (w, &x) in rigid.iter().enumerate() {
