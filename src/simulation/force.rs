@@ -69,9 +69,10 @@ pub(crate) struct ForceGauge {
     /// Direction of the blade's last move (unit).
     heading: [f32; 3],
     last_target: Option<[f32; 3]>,
-    /// The elements the jaws hold (scratch, refilled every step), and a sorted copy of them.
+    /// The elements the jaws hold (scratch, refilled every step), and a bit per element of the
+    /// tissue to mark them while their force is summed (all clear between steps).
     held: Vec<crate::chainmail::ElementId>,
-    sorted: Vec<crate::chainmail::ElementId>,
+    marks: Vec<u64>,
     /// The tissue's stiffness at the grasped patch, N/m, and the element it was measured around.
     patch: Option<(crate::chainmail::ElementId, f32)>,
     /// The force on the held elements last measured, with the body's motion count and revision then
@@ -105,7 +106,7 @@ impl ForceGauge {
                     f
                 }
                 _ => {
-                    let f = tissue.force_on_many(&self.held, &mut self.sorted);
+                    let f = tissue.force_on_many(&self.held, &mut self.marks);
                     self.memo = Some((key.0, key.1, f));
                     self.memo_held.clone_from(&self.held);
                     f
