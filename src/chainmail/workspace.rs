@@ -148,8 +148,9 @@ impl Workspace {
     pub(crate) fn rollback(&mut self, pos: &mut [[f32; 3]]) {
         // The raised elements the completion did not list (those it did are in the moved list).
         if self.lift.raised {
-            for (w, &x) in self.lift.unlisted.iter().enumerate() {
-                let mut x = x;
+            let span = self.lift.unlisted_span;
+            for (w, &x) in span.of(&self.lift.unlisted).iter().enumerate() {
+                let (w, mut x) = (span.words().start + w, x);
                 while x != 0 {
                     let i = w * 64 + x.trailing_zeros() as usize;
                     x &= x - 1;
