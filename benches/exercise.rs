@@ -45,9 +45,7 @@ impl Session {
     }
 
     /// One step of the script, timed (wall and the thread's CPU time); restarts the script (untimed)
-    /// when it has ended.
-    /// One step: its wall and CPU time, and whether the script started again before it (the
-    /// session before it was played to its end).
+    /// when it has ended, and says so (the session before this step was played to its end).
     fn step(&mut self) -> (Duration, Duration, bool) {
         self.player.feed(&mut self.world);
         let restarted = self.player.finished() && self.world.pending().is_empty();

@@ -167,16 +167,30 @@ impl Span {
         }
         *self = Span::default();
     }
+
+    /// Makes `bits` `words` words long and all clear, and the span empty: only the span's words are
+    /// cleared when the length is right already.
+    pub(crate) fn reset(&mut self, bits: &mut Vec<u64>, words: usize) {
+        if bits.len() == words {
+            self.clear(bits);
+        } else {
+            bits.clear();
+            bits.resize(words, 0);
+            *self = Span::default();
+        }
+    }
 }
 
-/// `dst` made a copy of `src` (of the same length; every word of each outside its span clear): the
-/// words of `dst`'s span cleared, then those of `src`'s copied. The copy's span is returned.
-fn copy_within_spans(dst: &mut [u64], dst_span: &mut Span, src: &[u64], src_span: Span) {
-    dst_span.clear(dst);
-    let r = src_span.words();
-    if let (Some(d), Some(s)) = (dst.get_mut(r.clone()), src.get(r)) {
-        d.copy_from_slice(s);
-        *dst_span = src_span;
+/// Copies the words of `src` within `span` into `dst` (all clear, as long as `src`) and returns the
+/// copy's span.
+fn copy_span(dst: &mut [u64], src: &[u64], span: Span) -> Span {
+    let r = span.words();
+    match (dst.get_mut(r.clone()), src.get(r)) {
+        (Some(d), Some(s)) => {
+            d.copy_from_slice(s);
+            span
+        }
+        _ => Span::default(),
     }
 }
 
@@ -363,12 +377,8 @@ impl Body {
         };
         lift.tick += 1;
         lift.memos[at].used = lift.tick;
-        if lift.rigid.len() != words {
-            lift.rigid.clear();
-            lift.rigid.resize(words, 0);
-            lift.rigid_span = Span::default();
-        }
-        copy_within_spans(&mut lift.rigid, &mut lift.rigid_span, &lift.memos[at].rose, lift.memos[at].span);
+        lift.rigid_span.reset(&mut lift.rigid, words);
+        lift.rigid_span = copy_span(&mut lift.rigid, &lift.memos[at].rose, lift.memos[at].span);
         let span = lift.rigid_span.words();
         let n = self.pos.len();
         // No fixed element is rigid (the memory may predate a grasp).
@@ -545,18 +555,12 @@ impl Body {
         memo.shape = self.shape;
         memo.revision = self.revision;
         memo.rise = rise;
-        if memo.rose.len() == words {
-            memo.span.clear(&mut memo.rose);
-        } else {
-            memo.rose.clear();
-            memo.rose.resize(words, 0);
-            memo.span = Span::default();
-        }
+        memo.span.reset(&mut memo.rose, words);
         if rise > 0.0 {
             // Raised and not moved again: rose by the seeds' rise. Moved by the lists or the
             // completion: rose with them if within a thousandth of their rise.
             if unlisted.len() == words {
-                copy_within_spans(&mut memo.rose, &mut memo.span, unlisted, *unlisted_span);
+                memo.span = copy_span(&mut memo.rose, unlisted, *unlisted_span);
             }
             let tol = MATCH * rise;
             for &e in &ws.moved {
@@ -570,12 +574,8 @@ impl Body {
                 }
             }
             // Only those whose eight neighbours rose with them too (see above).
-            if rose_all.len() != words {
-                rose_all.clear();
-                rose_all.resize(words, 0);
-                *rose_all_span = Span::default();
-            }
-            copy_within_spans(rose_all, rose_all_span, &memo.rose, memo.span);
+            rose_all_span.reset(rose_all, words);
+            *rose_all_span = copy_span(rose_all, &memo.rose, memo.span);
             let span = memo.span.words();
             for (w, x) in memo.rose.iter_mut().enumerate().take(span.end).skip(span.start) {
                 if *x != 0 {
@@ -590,8 +590,8 @@ impl Body {
 mod tests {
     use super::*;
 
-    /// A span takes in the words added, clears only its own words, and copies between spans leave
-    /// the copy equal to the source everywhere.
+    /// A span takes in the words added, clears only its own words, and a copy into a reset set is
+    /// the source everywhere.
     #[test]
     fn spans_bound_the_words_set() {
         let mut span = Span::default();
@@ -615,9 +615,14 @@ mod tests {
         dst_span.add(1);
         dst[9] = 2;
         dst_span.add(9);
-        copy_within_spans(&mut dst, &mut dst_span, &src, src_span);
+        dst_span.reset(&mut dst, 10);
+        assert!(dst.iter().all(|&w| w == 0) && dst_span.words().is_empty());
+        dst_span = copy_span(&mut dst, &src, src_span);
         assert_eq!(dst, src);
         assert_eq!(dst_span, src_span);
+        let mut short = vec![1u64; 3];
+        dst_span.reset(&mut short, 10);
+        assert_eq!(short, [0; 10]);
         assert_eq!(src_span.of(&src), &[9, 0, 1]);
     }
 }
