@@ -80,6 +80,9 @@ pub struct Body {
     /// reaction that kept moves, a relaxation, a direct write). What a blocked pull measured stays
     /// true while it and the revision stay the same.
     pub(crate) motion: u64,
+    /// How often positions changed other than by the in-place relaxation of a region (see
+    /// [`Body::shifts`]).
+    pub(crate) shifts: u64,
     /// Elements whose normal offset is bounded without a link between them (see `pairs.rs`).
     pub(crate) pairs: super::pairs::Pairs,
 }
@@ -155,6 +158,7 @@ impl Body {
             revision: 0,
             boxes_epoch: 0,
             motion: 0,
+            shifts: 0,
             pairs: Default::default(),
         };
         for l in 0..m {
@@ -316,8 +320,17 @@ impl Body {
         self.note_motion();
     }
 
-    /// Counts a change of positions (see [`Body::motion`]).
+    /// Counts a change of positions (see [`Body::motion`] and [`Body::shifts`]).
     pub(crate) fn note_motion(&mut self) {
+        self.motion = self.motion.wrapping_add(1);
+        self.shifts = self.shifts.wrapping_add(1);
+    }
+
+    /// Counts a change of positions made by the in-place relaxation of a region
+    /// (`Body::sweep_region`), which moves free elements only, each into the boxes around its
+    /// neighbours as they are, so that every bound that held still holds: a new [`Body::motion`],
+    /// the same [`Body::shifts`].
+    pub(crate) fn note_relaxation(&mut self) {
         self.motion = self.motion.wrapping_add(1);
     }
 
@@ -325,6 +338,22 @@ impl Body {
     /// counts (with equal revisions) mean the same positions.
     pub fn motion(&self) -> u64 {
         self.motion
+    }
+
+    /// The body's count of moves but a region's relaxation (see [`Body::note_relaxation`]): two
+    /// equal counts (with equal revisions) mean that no pinned or held element has moved, and no
+    /// free one other than by relaxing within the boxes around its neighbours.
+    ///
+    /// What a pull along the normal asks of a fixed element depends on these alone: the bounds on
+    /// the elements' heights are difference constraints (`z[x] - z[y]` within `[lo, hi]`), so a
+    /// source raised to `z` asks each element to reach at least `z` less the shortest chain of upper
+    /// bounds from the source to it (the least heights that meet the bounds the reaction's moves
+    /// disturb, which Gibson's lists and the completion find: `reaction/complete.rs`). The heights of
+    /// the free elements in between add nothing to that while the bounds between them hold, which
+    /// relaxation keeps: a pull blocked by pinned or held elements with no room at all stays blocked
+    /// however the region between relaxes (`tissue::grasp::BlockedPull`).
+    pub fn shifts(&self) -> u64 {
+        self.shifts
     }
 
     /// The body's revision: it changes whenever pins, holds, cuts or materials change.

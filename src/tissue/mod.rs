@@ -613,8 +613,9 @@ impl Tissue {
         }
         let slot = grasp::pass_index(pass);
         if let Some(b) = self.jaws.blocked[slot]
-            && b.covers(e, p, t, pass, &self.body)
+            && b.covers(e, (p, t), pass, &self.body, self.jaws.strict)
         {
+            self.jaws.spared += 1;
             return (0, b.fraction);
         }
         let (moved, fraction) = if self.jaws.held.len() > 1 && self.jaws.held.first().map(|h| h.0) == Some(e)

@@ -68,7 +68,7 @@ impl Tissue {
         // outside its limits.
         let mut report = crate::chainmail::sweeps_within(budget, || body.sweep_region(simd, part, last_move));
         if report.sweeps > 0 {
-            body.note_motion();
+            body.note_relaxation();
         }
         if partial {
             report.converged = false;
