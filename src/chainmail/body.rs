@@ -340,7 +340,7 @@ impl Body {
         self.motion
     }
 
-    /// The body's count of moves but a region's relaxation (see [`Body::note_relaxation`]): two
+    /// The body's count of moves but those of a region's in-place relaxation (`Tissue::relax`): two
     /// equal counts (with equal revisions) mean that no pinned or held element has moved, and no
     /// free one other than by relaxing within the boxes around its neighbours.
     ///

@@ -127,7 +127,7 @@ pub(crate) fn wake_ahead() {
 /// else the machine's cores). The pool lasts while the value is kept; the thread stays a worker until
 /// it is dropped.
 ///
-/// Why: [`here_and_there`] and [`in_turns`] hand half of the work to a pool thread inside a rayon
+/// Why: `here_and_there` and `in_turns` hand half of the work to a pool thread inside a rayon
 /// scope, and a scope waits until every job spawned in it has run. Called from outside the pool, the
 /// caller cannot run that job itself: when no pool thread has started it by the time the caller has
 /// done all the work (a machine whose other cores are busy: the trainer's windows drawing with a

@@ -11,7 +11,7 @@ pub const SWEEP_NS_PER_ELEMENT: f64 = 1.0;
 pub const WARN_FACTOR: f64 = 2.0;
 
 impl Scene {
-    /// Estimated time of one step's relaxation, seconds: elements × sweeps × [`SWEEP_NS_PER_ELEMENT`]
+    /// Estimated time of one step's relaxation, seconds: elements × sweeps × `SWEEP_NS_PER_ELEMENT`
     /// (a lower bound: the chain reaction, contact and tears come on top).
     pub fn relax_seconds_per_step(&self) -> f64 {
         if let Tissue::Volume(v) = &self.tissue
@@ -22,7 +22,7 @@ impl Scene {
         self.element_count() as f64 * f64::from(self.simulation.relax_sweeps) * SWEEP_NS_PER_ELEMENT * 1e-9
     }
 
-    /// A warning when the steps will cost far more than the rate allows ([`WARN_FACTOR`] times the
+    /// A warning when the steps will cost far more than the rate allows (`WARN_FACTOR` times the
     /// step), for `dissect check` and the trainer; `None` when the scene should keep up.
     pub fn cost_warning(&self) -> Option<String> {
         let cost = self.relax_seconds_per_step();

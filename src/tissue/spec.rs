@@ -48,7 +48,7 @@ pub struct ConnectiveSpec {
     /// spacing is finer, one element in `k` along each axis is a site (`k` the nearest whole number to
     /// this over the spacing, see [`ConnectiveSpec::stride`]), so that a finer `resolution` joins the
     /// layers with the same fibres per square millimetre, not more. 0: every element is a site.
-    /// Default [`FIBRE_SPACING`].
+    /// Default `FIBRE_SPACING`.
     #[serde(default = "fibre_spacing")]
     pub spacing: f32,
 }
