@@ -67,6 +67,7 @@ pub(crate) use lattice::SIDE_B as SIDE_B_BIT;
 pub use lattice::{Axis, BYTES_PER_ELEMENT, GridSpec, Lattice, LinkSpec, MAX_ELEMENTS};
 pub use material::{DEFAULT_THICKNESS, DEFAULT_TOUGHNESS, DEFAULT_YOUNG_MODULUS, Limits, Material};
 pub use pairs::NormalPair;
+pub(crate) use reaction::has_bit;
 pub use reaction::{Deformation, Pass};
 pub(crate) use relax::sweeps_within;
 pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};

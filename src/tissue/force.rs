@@ -240,9 +240,7 @@ impl Tissue {
             set(marks, e, true);
         }
         let marked = &marks[..];
-        let f = self.force_on_where(held, |n| {
-            marked.get(n.index() / 64).is_some_and(|w| w >> (n.index() % 64) & 1 != 0)
-        });
+        let f = self.force_on_where(held, |n| crate::chainmail::has_bit(marked, n.index()));
         for &e in held {
             set(marks, e, false);
         }
