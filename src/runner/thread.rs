@@ -574,6 +574,12 @@ fn run(
                 control.set_realtime(keeps_realtime(&meter.done, period), say);
             }
             dirty = true;
+        } else if episode.finished() {
+            // The call that found the script played out (its last `At` reached) stepped nothing but
+            // ended the episode: the next frame must say so. (Until 2026-11-29 a replay whose last
+            // step had just been published never said it had finished: about one run in five of a
+            // loaded machine's live-session test waited for it in vain.)
+            dirty = true;
         }
         messages(&mut episode, say);
         deadline += period;
