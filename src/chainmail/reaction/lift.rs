@@ -408,8 +408,24 @@ impl Body {
         let g = ws.generation;
         let (pos, old_z, stamp) = (&mut self.pos[..n], &mut lift.old_z[..n], &mut ws.stamp[..n]);
         let mut raised = 0usize;
-        // The raise.
-        for (w, &x) in lift.rigid.iter().enumerate().take(span.end).skip(span.start) {
+        if lift.edges_of != Some(grid) {
+            lift.edges = grid.edges();
+            lift.edges_of = Some(grid);
+        }
+        let (w_slots, mask) = (self.width, class_z.len().wrapping_sub(1));
+        let (slot_nbr, slot_class) = (&self.slot_nbr[..n * w_slots], &self.slot_class[..n * w_slots]);
+        let layer = grid.nx * grid.ny;
+        let key = (self.revision, self.boxes_epoch);
+        let il = layer as isize;
+        let rigid = &lift.rigid[..];
+        // The raise, and word by word after it (while the word's positions are in cache) the rim:
+        // rigid elements with a neighbour not rigid (the eight around them on their layer's grid:
+        // links and normal pairs; a grid's edge, which a wrapped axis joins to the other, always
+        // counts as one), and those whose fibre to the other layer's element, if not rigid, the raise
+        // left outside its bound (such an element is not raised, so it reads the same before the
+        // raise of its word as after). (Two passes until 2026-11-29: the rim's then read back the
+        // positions of a whole tent, evicted from the caches by the raise at 512 x 384.)
+        for (w, &x) in rigid.iter().enumerate().take(span.end).skip(span.start) {
             if x == 0 {
                 continue;
             }
@@ -437,28 +453,6 @@ impl Body {
             if up != 0 {
                 lift.unlisted_span.add(w);
             }
-        }
-        lift.unlisted_count = raised;
-        lift.raised = raised > 0;
-        // The rim: rigid elements with a neighbour not rigid (the eight around them on their layer's
-        // grid: links and normal pairs; a grid's edge, which a wrapped axis joins to the other, always
-        // counts as one), and those whose fibre to the other layer's element, if not rigid, the raise
-        // left outside its bound.
-        if lift.edges_of != Some(grid) {
-            lift.edges = grid.edges();
-            lift.edges_of = Some(grid);
-        }
-        let (w_slots, mask) = (self.width, class_z.len().wrapping_sub(1));
-        let (slot_nbr, slot_class) = (&self.slot_nbr[..n * w_slots], &self.slot_class[..n * w_slots]);
-        let layer = grid.nx * grid.ny;
-        let key = (self.revision, self.boxes_epoch);
-        let il = layer as isize;
-        let rigid = &lift.rigid[..];
-        for (w, &x) in rigid.iter().enumerate().take(span.end).skip(span.start) {
-            if x == 0 {
-                continue;
-            }
-            let first = w * 64;
             let base = first as isize;
             let inner = grid.surrounded(rigid, w) & !lift.edges[w];
             let mut out = x & !inner;
@@ -517,6 +511,8 @@ impl Body {
                 }
             }
         }
+        lift.unlisted_count = raised;
+        lift.raised = raised > 0;
     }
 
     /// Remembers, after a reaction that stands, which elements rose with its seeds (`seeds`: the ones
