@@ -14,7 +14,9 @@
 //! links' boxes (materials tuned live) and their breaking (cuts, tears). Pairs are given as element
 //! pairs and link paths, not as grid arithmetic, so that other meshes can state theirs.
 
-use super::body::{Body, INTACT};
+use rustc_hash::FxHashMap;
+
+use super::body::{Body, INTACT, fresh_number};
 use super::error::ChainMailError;
 use super::ids::{ElementId, LinkId, MaterialId};
 
@@ -38,9 +40,18 @@ pub(crate) struct Pairs {
     pub(crate) width: usize,
     /// Partner of each slot (the owner itself for padding).
     pub(crate) nbr: Vec<u32>,
-    /// Bounds `[lo, hi]` of each slot on `p[owner][2] - p[nbr][2]` (infinite for padding and for a
-    /// pair with no intact path).
-    pub(crate) bounds: Vec<[f32; 2]>,
+    /// Class of each slot: where its bounds `[lo, hi]` on `p[owner][2] - p[nbr][2]` sit in `table`
+    /// (0, infinite, for padding and for a pair with no intact path). Slots share bounds (a uniform
+    /// sheet has a few hundred), so the hot loops read 4 bytes a slot and find the bounds in cache,
+    /// as they do the links' classes.
+    pub(crate) class: Vec<u32>,
+    /// The distinct bounds; entry 0 is [`FREE`].
+    pub(crate) table: Vec<[f32; 2]>,
+    /// Where each bound sits in `table`, by its bits.
+    index: FxHashMap<[u32; 2], u32>,
+    /// A new number whenever `table` changes (an entry added, or the table compacted): what a copy
+    /// of it (the completion's widened table) is keyed by.
+    pub(crate) epoch: u64,
     /// How far outside a normal pass left a bound of an element it moved (see
     /// `reaction/complete.rs`): the limits' repair reads it ([`Body::take_pairs_unmet`]).
     pub(crate) unmet: f32,
@@ -52,7 +63,56 @@ pub(crate) struct Pairs {
     link_pairs: Vec<u32>,
 }
 
+/// Infinite bounds: a padding slot's, or a pair's with no intact path.
+pub(crate) const FREE: [f32; 2] = [f32::NEG_INFINITY, f32::INFINITY];
+
+/// Most entries the bounds' table holds before it is compacted to the bounds in use (materials
+/// edited live again and again leave old bounds behind).
+const TABLE_MAX: usize = 1 << 16;
+
 impl Pairs {
+    /// The bounds of class `c` (infinite for one out of range).
+    #[inline(always)]
+    pub(crate) fn bounds_of(&self, c: u32) -> [f32; 2] {
+        self.table.get(c as usize).copied().unwrap_or(FREE)
+    }
+
+    /// The bounds of slot `k`.
+    pub(crate) fn bound(&self, k: usize) -> [f32; 2] {
+        self.class.get(k).map_or(FREE, |&c| self.bounds_of(c))
+    }
+
+    /// The class of `bounds`, added to the table if new.
+    fn intern(&mut self, bounds: [f32; 2]) -> u32 {
+        let key = bounds.map(f32::to_bits);
+        if let Some(&c) = self.index.get(&key) {
+            return c;
+        }
+        if self.table.len() >= TABLE_MAX {
+            self.compact();
+        }
+        let c = self.table.len() as u32;
+        self.table.push(bounds);
+        self.index.insert(key, c);
+        self.epoch = fresh_number();
+        c
+    }
+
+    /// Keeps only the bounds some slot has (renumbering the slots' classes).
+    fn compact(&mut self) {
+        let mut table = vec![FREE];
+        let mut index = FxHashMap::from_iter([(FREE.map(f32::to_bits), 0)]);
+        for c in &mut self.class {
+            let b = self.table.get(*c as usize).copied().unwrap_or(FREE);
+            *c = *index.entry(b.map(f32::to_bits)).or_insert_with(|| {
+                table.push(b);
+                (table.len() - 1) as u32
+            });
+        }
+        (self.table, self.index) = (table, index);
+        self.epoch = fresh_number();
+    }
+
     /// Whether the body has any pair.
     #[inline(always)]
     pub(crate) fn any(&self) -> bool {
@@ -61,9 +121,11 @@ impl Pairs {
 
     /// The pair slots of element `i`: partners and bounds on `p[i][2] - p[partner][2]`.
     #[inline(always)]
-    pub(crate) fn row(&self, i: usize) -> (&[u32], &[[f32; 2]]) {
+    pub(crate) fn row(&self, i: usize) -> impl Iterator<Item = (u32, [f32; 2])> + '_ {
         let r = i * self.width..(i + 1) * self.width;
-        (&self.nbr[r.clone()], &self.bounds[r])
+        let (nbr, class) =
+            (self.nbr.get(r.clone()).unwrap_or_default(), self.class.get(r).unwrap_or_default());
+        nbr.iter().zip(class).map(|(&y, &c)| (y, self.bounds_of(c)))
     }
 }
 
@@ -101,8 +163,7 @@ impl Body {
         }
         let width = if pairs.is_empty() { 0 } else { degree.iter().copied().max().unwrap_or(0) as usize };
         let mut nbr: Vec<u32> = (0..n * width).map(|k| (k / width.max(1)) as u32).collect();
-        let free = [f32::NEG_INFINITY, f32::INFINITY];
-        let mut bounds = vec![free; n * width];
+        let class = vec![0u32; n * width];
         let mut fill = vec![0u32; n];
         let mut slots = Vec::with_capacity(pairs.len());
         for p in pairs {
@@ -132,9 +193,19 @@ impl Body {
                 at[l.index()] += 1;
             }
         }
-        bounds.shrink_to_fit();
-        self.pairs =
-            Pairs { width, nbr, bounds, unmet: 0.0, list: pairs.to_vec(), slots, link_start, link_pairs };
+        self.pairs = Pairs {
+            width,
+            nbr,
+            class,
+            table: vec![FREE],
+            index: FxHashMap::from_iter([(FREE.map(f32::to_bits), 0)]),
+            epoch: fresh_number(),
+            unmet: 0.0,
+            list: pairs.to_vec(),
+            slots,
+            link_start,
+            link_pairs,
+        };
         for k in 0..pairs.len() {
             self.update_pair(k);
         }
@@ -158,7 +229,7 @@ impl Body {
     pub fn normal_pair_limits(&self, k: usize) -> Option<(NormalPair, [f32; 2])> {
         let p = *self.pairs.list.get(k)?;
         let [_, sb] = self.pairs.slots[k];
-        Some((p, self.pairs.bounds[sb as usize]))
+        Some((p, self.pairs.bound(sb as usize)))
     }
 
     /// Recomputes the pairs whose paths use link `l` (its box or state changed).
@@ -209,8 +280,13 @@ impl Body {
         }
         let [sa, sb] = self.pairs.slots[k];
         // `b`'s slot bounds `p[b] - p[a]`; `a`'s the negation.
-        self.pairs.bounds[sb as usize] = [lo, hi];
-        self.pairs.bounds[sa as usize] = [-hi, -lo];
+        let (cb, ca) = (self.pairs.intern([lo, hi]), self.pairs.intern([-hi, -lo]));
+        if let Some(c) = self.pairs.class.get_mut(sb as usize) {
+            *c = cb;
+        }
+        if let Some(c) = self.pairs.class.get_mut(sa as usize) {
+            *c = ca;
+        }
     }
 
     /// The bounds of `p[b][2] - p[a][2]` along a path of two links from `a` (`None` if the path does
@@ -296,10 +372,33 @@ mod tests {
         for (l, (e, b)) in edited.link_box.iter().zip(&built.link_box).enumerate() {
             assert_eq!(bits(e), bits(b), "link {l}");
         }
-        for (k, (e, b)) in edited.pairs.bounds.iter().zip(&built.pairs.bounds).enumerate() {
+        assert_eq!(edited.pairs.class.len(), built.pairs.class.len());
+        for k in 0..built.pairs.class.len() {
+            let (e, b) = (edited.pairs.bound(k), built.pairs.bound(k));
             assert_eq!(e.map(f32::to_bits), b.map(f32::to_bits), "pair slot {k}");
         }
         assert_ne!(slot(&edited, 0), slot(&sheet_with_pairs(n, d, 0.25), 0), "the edit changed nothing");
+    }
+
+    /// The pairs' bounds are interned: slots share a handful of entries, and a compaction (what a
+    /// table grown by many edits gets) drops unused entries and keeps every slot's bounds to the bit.
+    #[test]
+    fn pair_bounds_are_shared_and_survive_a_compaction() {
+        let mut body = sheet_with_pairs(9, 0.001, 0.25);
+        let slots = body.pairs.class.len();
+        let before: Vec<[u32; 2]> = (0..slots).map(|k| body.pairs.bound(k).map(f32::to_bits)).collect();
+        assert!(body.pairs.table.len() < 16, "{} entries for {slots} slots", body.pairs.table.len());
+        assert_eq!(body.pairs.table[0].map(f32::to_bits), super::FREE.map(f32::to_bits));
+        for k in 0..100 {
+            body.pairs.intern([k as f32, k as f32 + 1.0]);
+        }
+        let (grown, epoch) = (body.pairs.table.len(), body.pairs.epoch);
+        body.pairs.compact();
+        assert!(body.pairs.table.len() + 100 <= grown, "{} of {grown} kept", body.pairs.table.len());
+        assert_ne!(body.pairs.epoch, epoch, "a compaction renumbers: copies of the table are stale");
+        for (k, b) in before.iter().enumerate() {
+            assert_eq!(&body.pairs.bound(k).map(f32::to_bits), b, "slot {k}");
+        }
     }
 
     #[test]

@@ -37,6 +37,10 @@ pub struct Workspace {
     pub(crate) pair_bits: Vec<u64>,
     pub(crate) class_z: Vec<[f32; 4]>,
     pub(crate) class_z_key: (u64, usize),
+    /// The normal pairs' bounds per class as the completion reads them (widened and as they are,
+    /// padded to a power of two), and the pairs' table epoch they were made for.
+    pub(crate) pair_z: Vec<[f32; 4]>,
+    pub(crate) pair_z_key: u64,
     /// The completion takes its plain path whatever the widths (for the tests that compare the two).
     pub(crate) plain_pairs: bool,
 

@@ -262,7 +262,7 @@ impl Tissue {
             let pw = self.body.pairs.width;
             for t in 0..pw {
                 let y = self.body.pairs.nbr[x * pw + t] as usize;
-                let [lo, hi] = self.body.pairs.bounds[x * pw + t];
+                let [lo, hi] = self.body.pairs.bound(x * pw + t);
                 let (px, py) = (self.body.pos[x], self.body.pos[y]);
                 let d = px[2] - py[2];
                 let over = if d > hi + tol {
@@ -411,8 +411,7 @@ impl Tissue {
                 return true;
             }
         }
-        let (pairs, bounds) = body.pairs.row(i);
-        for (&y, &[lo, hi]) in pairs.iter().zip(bounds) {
+        for (y, [lo, hi]) in body.pairs.row(i) {
             let d = pi[2] - body.pos[y as usize][2];
             if (d > hi + tol) | (d < lo - tol) {
                 return true;

@@ -38,6 +38,7 @@
 use super::Measure;
 use super::lift::Span;
 use crate::chainmail::body::{Body, FIXED, SlotClass};
+use crate::chainmail::pairs;
 use crate::chainmail::workspace::Workspace;
 
 /// Most moves of one pass, per element of the body (and at least [`MIN_MOVES`]): a bound on its cost
@@ -54,6 +55,12 @@ const TOLERANCE: f32 = 1e-5;
 fn widen_z([lo, hi]: [f32; 2]) -> [f32; 2] {
     let tol = TOLERANCE * (hi - lo);
     [lo - tol, hi + tol]
+}
+
+/// Bounds `[lo, hi]` as the fast path reads them: widened, then as they are.
+fn widened(bound: [f32; 2]) -> [f32; 4] {
+    let [wlo, whi] = widen_z(bound);
+    [wlo, whi, bound[0], bound[1]]
 }
 
 /// Where one bound of the completion stands: `z[x] - z[y]` must lie in `[lo, hi]`.
@@ -242,6 +249,21 @@ impl Body {
         class_z
     }
 
+    /// The normal pairs' bounds per class as the completion reads them (see [`Body::class_z_table`]),
+    /// taken out of the workspace (give it back to `ws.pair_z`).
+    fn pair_z_table(&self, ws: &mut Workspace) -> Vec<[f32; 4]> {
+        let mut pair_z = std::mem::take(&mut ws.pair_z);
+        let table = &self.pairs.table;
+        let len = table.len().next_power_of_two();
+        if ws.pair_z_key != self.pairs.epoch || pair_z.len() != len {
+            pair_z.clear();
+            pair_z.extend(table.iter().map(|&b| widened(b)));
+            pair_z.resize(len, widened(pairs::FREE));
+            ws.pair_z_key = self.pairs.epoch;
+        }
+        pair_z
+    }
+
     /// Completes the normal pass of a body with normal pairs (see the module's comment), raising a
     /// lift's rigid elements first when `raise` gives the seeds (`lift.rs`; otherwise they rose before
     /// the lists). A fixed element that would have to move raises `excess` (the normal coordinate) by
@@ -262,6 +284,7 @@ impl Body {
             unmet: 0.0,
         };
         let class_z = self.class_z_table(ws);
+        let pair_z = self.pair_z_table(ws);
         // A lift's rigid elements rise now if they did not before the lists (from these seeds).
         if let Some(seeds) = raise {
             self.raise_rigid(ws, seeds, &class_z);
@@ -297,7 +320,9 @@ impl Body {
             classes: &self.classes[..],
             class_z: &class_z[..],
             pair_nbr: &self.pairs.nbr[..],
-            pair_bounds: &self.pairs.bounds[..],
+            pair_class: &self.pairs.class[..],
+            pair_table: &self.pairs.table[..],
+            pair_z: &pair_z[..],
             widths: [self.width, self.pairs.width],
         };
         let mut run = Run { bits: &mut bits, queue: &mut queue, tally: &mut tally, measure, excess };
@@ -316,14 +341,15 @@ impl Body {
             span.clear(&mut bits);
         }
         ws.class_z = class_z;
+        ws.pair_z = pair_z;
         ws.pair_bits = bits;
         Completion { blocked: tally.blocked, unmet: tally.unmet }
     }
 }
 
 /// What a pass reads: the body's flags, link slots and classes (and the classes' normal bounds,
-/// widened and as they are: `[lo - tol, hi + tol, lo, hi]`), its pair slots with their bounds, and
-/// the widths of both rows.
+/// widened and as they are: `[lo - tol, hi + tol, lo, hi]`), its pair slots and their classes (with
+/// the pairs' table of bounds, and the same widened and as they are), and the widths of both rows.
 struct Bounds<'a> {
     flags: &'a [u8],
     slot_nbr: &'a [u32],
@@ -331,7 +357,9 @@ struct Bounds<'a> {
     classes: &'a [SlotClass],
     class_z: &'a [[f32; 4]],
     pair_nbr: &'a [u32],
-    pair_bounds: &'a [[f32; 2]],
+    pair_class: &'a [u32],
+    pair_table: &'a [[f32; 2]],
+    pair_z: &'a [[f32; 4]],
     widths: [usize; 2],
 }
 
@@ -363,7 +391,9 @@ impl Run<'_> {
         let nbr_rows = &b.slot_nbr[..n * W].as_chunks::<W>().0[..n];
         let cls_rows = &b.slot_class[..n * W].as_chunks::<W>().0[..n];
         let pn_rows = &b.pair_nbr[..n * P].as_chunks::<P>().0[..n];
-        let pb_rows = &b.pair_bounds[..n * P].as_chunks::<P>().0[..n];
+        let pc_rows = &b.pair_class[..n * P].as_chunks::<P>().0[..n];
+        let Some(pair_mask) = b.pair_z.len().checked_sub(1) else { return self.plain(b, m) };
+        let pair_z = b.pair_z;
         let (class_z, flags, g) = (b.class_z, &b.flags[..n], m.g);
         let pos = &mut m.pos[..n];
         let old = &mut m.old[..n];
@@ -384,8 +414,8 @@ impl Run<'_> {
                 let d = z - pos[(nbrs[t] as usize).min(last)][2];
                 out |= (((d > hi) | (d < lo)) as u32) << t;
             }
-            for (t, &bound) in pb_rows[x].iter().enumerate() {
-                let [lo, hi] = widen_z(bound);
+            for (t, &c) in pc_rows[x].iter().enumerate() {
+                let [lo, hi, _, _] = pair_z[c as usize & pair_mask];
                 let d = z - pos[(pn[t] as usize).min(last)][2];
                 out |= (((d > hi) | (d < lo)) as u32) << (W + t);
             }
@@ -397,7 +427,7 @@ impl Run<'_> {
                     ((nbrs[t] as usize).min(last), lo, hi)
                 } else {
                     let k = (t - W) % P;
-                    let [lo, hi] = pb_rows[x][k];
+                    let [_, _, lo, hi] = pair_z[pc_rows[x][k] as usize & pair_mask];
                     ((pn[k] as usize).min(last), lo, hi)
                 };
                 // `meet` where `y` has not moved in this reaction and is free (most bounds found
@@ -457,7 +487,8 @@ impl Run<'_> {
                     let [lo, hi] = b.classes[b.slot_class[x * w + t] as usize].bounds;
                     (b.slot_nbr[x * w + t] as usize, [lo[2], hi[2]])
                 } else {
-                    (b.pair_nbr[x * pw + t - w] as usize, b.pair_bounds[x * pw + t - w])
+                    let c = b.pair_class[x * pw + t - w] as usize;
+                    (b.pair_nbr[x * pw + t - w] as usize, b.pair_table.get(c).copied().unwrap_or(pairs::FREE))
                 };
                 let [lo, hi] = widen_z(bound);
                 let d = z - m.pos[y][2];

@@ -79,8 +79,7 @@ impl Body {
         }
         // Normal pairs bound the normal coordinate too: the intersection with theirs, and the step
         // shortened to it as to the links' (never further out than the element is, never backwards).
-        let (nbrs, bounds) = self.pairs.row(i);
-        for (&j, &[blo, bhi]) in nbrs.iter().zip(bounds) {
+        for (j, [blo, bhi]) in self.pairs.row(i) {
             let z = pos_of(j as usize)[2];
             lo[2] = lo[2].max(z + blo);
             hi[2] = hi[2].min(z + bhi);

@@ -56,7 +56,7 @@ impl Body {
         let n = self.pos.len();
         let (flags, rest, classes) = (&self.flags[..n], &self.lattice.rest[..n], &self.classes[..]);
         let (slot_nbr, slot_class) = (&self.slot_nbr[..], &self.slot_class[..]);
-        let (pair_nbr, pair_bounds) = (&self.pairs.nbr[..], &self.pairs.bounds[..]);
+        let (pair_nbr, pair_class, pairs) = (&self.pairs.nbr[..], &self.pairs.class[..], &self.pairs);
         let pos = &mut self.pos[..];
         let mut change = 0.0f32;
         for &e in part.into_iter().flatten() {
@@ -79,16 +79,17 @@ impl Body {
                 // instructions in this sweep.)
                 if P > 0 {
                     let prow = i * P..(i + 1) * P;
-                    let (Ok(pn), Ok(pb)) = (
+                    let (Ok(pn), Ok(pc)) = (
                         <&[u32; P]>::try_from(&pair_nbr[prow.clone()]),
-                        <&[[f32; 2]; P]>::try_from(&pair_bounds[prow]),
+                        <&[u32; P]>::try_from(&pair_class[prow]),
                     ) else {
                         continue;
                     };
                     for k in 0..P {
                         let z = pos[pn[k] as usize][2];
-                        lo[2] = lo[2].max(z + pb[k][0]);
-                        hi[2] = hi[2].min(z + pb[k][1]);
+                        let [blo, bhi] = pairs.bounds_of(pc[k]);
+                        lo[2] = lo[2].max(z + blo);
+                        hi[2] = hi[2].min(z + bhi);
                     }
                     let floor = if lo[2] < p[2] { lo[2] } else { p[2] };
                     let ceil = if hi[2] > p[2] { hi[2] } else { p[2] };
