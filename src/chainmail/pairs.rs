@@ -52,6 +52,9 @@ pub(crate) struct Pairs {
     /// A new number whenever `table` changes (an entry added, or the table compacted): what a copy
     /// of it (the completion's widened table) is keyed by.
     pub(crate) epoch: u64,
+    /// The table's length at which it is next compacted (at least [`TABLE_MAX`]; twice what the
+    /// last compaction kept, so that a table mostly in use is not compacted at every new entry).
+    compact_at: usize,
     /// How far outside a normal pass left a bound of an element it moved (see
     /// `reaction/complete.rs`): the limits' repair reads it ([`Body::take_pairs_unmet`]).
     pub(crate) unmet: f32,
@@ -69,6 +72,11 @@ pub(crate) const FREE: [f32; 2] = [f32::NEG_INFINITY, f32::INFINITY];
 /// Most entries the bounds' table holds before it is compacted to the bounds in use (materials
 /// edited live again and again leave old bounds behind).
 const TABLE_MAX: usize = 1 << 16;
+
+/// A table of bounds holding [`FREE`] alone, as class 0, and its index.
+fn free_table() -> (Vec<[f32; 2]>, FxHashMap<[u32; 2], u32>) {
+    (vec![FREE], FxHashMap::from_iter([(FREE.map(f32::to_bits), 0)]))
+}
 
 impl Pairs {
     /// The bounds of class `c` (infinite for one out of range).
@@ -88,7 +96,7 @@ impl Pairs {
         if let Some(&c) = self.index.get(&key) {
             return c;
         }
-        if self.table.len() >= TABLE_MAX {
+        if self.table.len() >= self.compact_at.max(TABLE_MAX) {
             self.compact();
         }
         let c = self.table.len() as u32;
@@ -100,8 +108,7 @@ impl Pairs {
 
     /// Keeps only the bounds some slot has (renumbering the slots' classes).
     fn compact(&mut self) {
-        let mut table = vec![FREE];
-        let mut index = FxHashMap::from_iter([(FREE.map(f32::to_bits), 0)]);
+        let (mut table, mut index) = free_table();
         for c in &mut self.class {
             let b = self.table.get(*c as usize).copied().unwrap_or(FREE);
             *c = *index.entry(b.map(f32::to_bits)).or_insert_with(|| {
@@ -110,6 +117,7 @@ impl Pairs {
             });
         }
         (self.table, self.index) = (table, index);
+        self.compact_at = 2 * self.table.len();
         self.epoch = fresh_number();
     }
 
@@ -193,13 +201,15 @@ impl Body {
                 at[l.index()] += 1;
             }
         }
+        let (table, index) = free_table();
         self.pairs = Pairs {
             width,
             nbr,
             class,
-            table: vec![FREE],
-            index: FxHashMap::from_iter([(FREE.map(f32::to_bits), 0)]),
+            table,
+            index,
             epoch: fresh_number(),
+            compact_at: TABLE_MAX,
             unmet: 0.0,
             list: pairs.to_vec(),
             slots,
@@ -396,6 +406,7 @@ mod tests {
         body.pairs.compact();
         assert!(body.pairs.table.len() + 100 <= grown, "{} of {grown} kept", body.pairs.table.len());
         assert_ne!(body.pairs.epoch, epoch, "a compaction renumbers: copies of the table are stale");
+        assert_eq!(body.pairs.compact_at, 2 * body.pairs.table.len(), "the next compaction waits");
         for (k, b) in before.iter().enumerate() {
             assert_eq!(&body.pairs.bound(k).map(f32::to_bits), b, "slot {k}");
         }

@@ -38,7 +38,7 @@
 use super::Measure;
 use super::lift::Span;
 use crate::chainmail::body::{Body, FIXED, SlotClass};
-use crate::chainmail::pairs;
+use crate::chainmail::pairs::{self, Pairs};
 use crate::chainmail::workspace::Workspace;
 
 /// Most moves of one pass, per element of the body (and at least [`MIN_MOVES`]): a bound on its cost
@@ -238,12 +238,8 @@ impl Body {
         let len = self.classes.len().next_power_of_two();
         if ws.class_z_key != key || class_z.len() != len {
             class_z.clear();
-            class_z.extend(self.classes.iter().map(|c| {
-                let bound = [c.bounds[0][2], c.bounds[1][2]];
-                let [wlo, whi] = widen_z(bound);
-                [wlo, whi, bound[0], bound[1]]
-            }));
-            class_z.resize(len, [f32::NEG_INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY]);
+            class_z.extend(self.classes.iter().map(|c| widened([c.bounds[0][2], c.bounds[1][2]])));
+            class_z.resize(len, widened(pairs::FREE));
             ws.class_z_key = key;
         }
         class_z
@@ -319,9 +315,7 @@ impl Body {
             slot_class: &self.slot_class[..],
             classes: &self.classes[..],
             class_z: &class_z[..],
-            pair_nbr: &self.pairs.nbr[..],
-            pair_class: &self.pairs.class[..],
-            pair_table: &self.pairs.table[..],
+            pairs: &self.pairs,
             pair_z: &pair_z[..],
             widths: [self.width, self.pairs.width],
         };
@@ -348,17 +342,15 @@ impl Body {
 }
 
 /// What a pass reads: the body's flags, link slots and classes (and the classes' normal bounds,
-/// widened and as they are: `[lo - tol, hi + tol, lo, hi]`), its pair slots and their classes (with
-/// the pairs' table of bounds, and the same widened and as they are), and the widths of both rows.
+/// widened and as they are: `[lo - tol, hi + tol, lo, hi]`), its normal pairs (and their classes'
+/// bounds, the same way), and the widths of both rows.
 struct Bounds<'a> {
     flags: &'a [u8],
     slot_nbr: &'a [u32],
     slot_class: &'a [u32],
     classes: &'a [SlotClass],
     class_z: &'a [[f32; 4]],
-    pair_nbr: &'a [u32],
-    pair_class: &'a [u32],
-    pair_table: &'a [[f32; 2]],
+    pairs: &'a Pairs,
     pair_z: &'a [[f32; 4]],
     widths: [usize; 2],
 }
@@ -390,8 +382,8 @@ impl Run<'_> {
         };
         let nbr_rows = &b.slot_nbr[..n * W].as_chunks::<W>().0[..n];
         let cls_rows = &b.slot_class[..n * W].as_chunks::<W>().0[..n];
-        let pn_rows = &b.pair_nbr[..n * P].as_chunks::<P>().0[..n];
-        let pc_rows = &b.pair_class[..n * P].as_chunks::<P>().0[..n];
+        let pn_rows = &b.pairs.nbr[..n * P].as_chunks::<P>().0[..n];
+        let pc_rows = &b.pairs.class[..n * P].as_chunks::<P>().0[..n];
         let Some(pair_mask) = b.pair_z.len().checked_sub(1) else { return self.plain(b, m) };
         let pair_z = b.pair_z;
         let (class_z, flags, g) = (b.class_z, &b.flags[..n], m.g);
@@ -487,8 +479,7 @@ impl Run<'_> {
                     let [lo, hi] = b.classes[b.slot_class[x * w + t] as usize].bounds;
                     (b.slot_nbr[x * w + t] as usize, [lo[2], hi[2]])
                 } else {
-                    let c = b.pair_class[x * pw + t - w] as usize;
-                    (b.pair_nbr[x * pw + t - w] as usize, b.pair_table.get(c).copied().unwrap_or(pairs::FREE))
+                    (b.pairs.nbr[x * pw + t - w] as usize, b.pairs.bound(x * pw + t - w))
                 };
                 let [lo, hi] = widen_z(bound);
                 let d = z - m.pos[y][2];
