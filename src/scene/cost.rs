@@ -4,7 +4,7 @@
 use super::types::{Scene, Tissue, VolumeModel};
 
 /// Time one relaxation sweep takes per element, nanoseconds: the engine's measured floor on the
-/// development machine (README, "Performance"); slower machines take longer.
+/// development machine (README, "Performance", and `docs/performance.md`); slower machines take longer.
 pub const SWEEP_NS_PER_ELEMENT: f64 = 1.0;
 
 /// How far over its step time a scene's estimate may go before it is warned about.

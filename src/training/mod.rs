@@ -647,11 +647,7 @@ impl Assessor {
         ));
         lost.push((
             20.0 * (1.0 - sep_share) * completion.max(0.25),
-            format!(
-                "Lift the {upper} clear: the layers are {:.1} mm apart over the target, the goal is {:.1} mm.",
-                1000.0 * separation.max(0.0),
-                1000.0 * g.separation
-            ),
+            separation_advice(upper, separation, g.separation),
         ));
         lost.push((
             20.0 * (1.0 - economy) * completion,
@@ -771,6 +767,25 @@ impl Assessor {
     }
 }
 
+/// What to do about the layers' separation over the target (`separation` and `goal` in metres), with
+/// the figure the assessment panel shows: below the rest gap (the lifted layer pushed onto the one
+/// under it) it says so, rather than "0.0 mm apart" beside a panel's "-1.1 mm".
+fn separation_advice(upper: &str, separation: f32, goal: f32) -> String {
+    let (mm, goal_mm) = (1000.0 * separation, 1000.0 * goal);
+    if (10.0 * mm).round() < 0.0 {
+        format!(
+            "Lift the {upper} clear: it is pressed {:.1} mm onto the layer under it over the target \
+             (separation {mm:.1} mm), the goal is {goal_mm:.1} mm apart.",
+            -mm
+        )
+    } else {
+        let mm = mm.max(0.0);
+        format!(
+            "Lift the {upper} clear: the layers are {mm:.1} mm apart over the target, the goal is {goal_mm:.1} mm."
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -792,5 +807,21 @@ mod tests {
         assert_eq!(broken_extent(&links, |l| l.0 != 1), (2, 1.75));
         // Nothing broken is zero, not negative zero (shown as "-0.0" otherwise).
         assert!(broken_extent(&links, |_| false).1.is_sign_positive());
+    }
+
+    /// The separation's advice states the panel's figure, pressed together included.
+    #[test]
+    fn separation_advice_states_the_panels_figure() {
+        assert_eq!(
+            separation_advice("dura", 0.0021, 0.004),
+            "Lift the dura clear: the layers are 2.1 mm apart over the target, the goal is 4.0 mm."
+        );
+        assert_eq!(
+            separation_advice("dura", -0.0011, 0.004),
+            "Lift the dura clear: it is pressed 1.1 mm onto the layer under it over the target \
+             (separation -1.1 mm), the goal is 4.0 mm apart."
+        );
+        // What rounds to zero reads as zero apart, not as pressed by 0.0 mm.
+        assert!(separation_advice("dura", -1e-5, 0.004).contains("are 0.0 mm apart"));
     }
 }
