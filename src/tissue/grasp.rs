@@ -282,4 +282,103 @@ mod tests {
         let (k, p) = (kept.tissue().jaws.spared, plain.tissue().jaws.spared);
         assert!(k > p, "kept through relaxation: {k} pulls spared, searched again: {p}");
     }
+
+    /// Every bound along the normal is a difference constraint, so the least distance `D` from the held
+    /// elements over them (an edge from an element to its neighbour weighs the upper bound on the
+    /// element's height over the neighbour's) bounds every state below: `z >= A - D`, `A` the held
+    /// elements' height. And a lift of the held elements to `A` is `max(z_before, A - D)`: outside the
+    /// relaxation's region, the careful exercise's final lift leaves every element there, or for under
+    /// 3 % of the rises above it, by the raise's overshoot. `docs/implicit-lift.md` builds on both.
+    #[test]
+    fn a_lift_is_a_distance_field_from_the_held_elements() {
+        use crate::chainmail::{Body, ElementId};
+        use std::cmp::Reverse;
+        use std::collections::BinaryHeap;
+
+        fn distances(body: &Body, seeds: &[usize]) -> Vec<f32> {
+            let mut d = vec![f32::INFINITY; body.pos.len()];
+            let mut heap = BinaryHeap::new();
+            for &s in seeds {
+                d[s] = 0.0;
+                heap.push(Reverse((0u32, s)));
+            }
+            while let Some(Reverse((key, u))) = heap.pop() {
+                let du = f32::from_bits(key);
+                if du > d[u] {
+                    continue;
+                }
+                let slots = (u * body.width..(u + 1) * body.width)
+                    .map(|k| (body.slot_nbr[k], body.classes[body.slot_class[k] as usize].bounds[1][2]));
+                for (y, hi) in slots.chain(body.pairs.row(u).map(|(y, [_, hi])| (y, hi))) {
+                    let (y, nd) = (y as usize, du + hi.max(0.0));
+                    if y != u && hi.is_finite() && nd < d[y] {
+                        d[y] = nd;
+                        heap.push(Reverse((nd.to_bits(), y)));
+                    }
+                }
+            }
+            d
+        }
+
+        let (mut world, mut player) = careful([96, 72], false);
+        let (mut seeds, mut d): (Vec<usize>, Vec<f32>) = (Vec::new(), Vec::new());
+        let (mut checked, mut rose, mut over, mut worst) = (0, 0usize, 0usize, 0f32);
+        let spacing = 0.08 / 96.0;
+        loop {
+            player.feed(&mut world);
+            if player.finished() && world.pending().is_empty() {
+                break;
+            }
+            let z_before: Vec<f32> = world.tissue().body().positions().iter().map(|p| p[2]).collect();
+            // The region relaxed this step: what it was before and what it is after (an element that
+            // settled leaves it at the step's end).
+            let region_before = world.tissue().in_active.clone();
+            world.step();
+            if !(1_300..1_467).contains(&world.step_count()) {
+                continue;
+            }
+            let tissue = world.tissue();
+            let body = tissue.body();
+            let held: Vec<usize> =
+                (0..body.pos.len()).filter(|&i| body.is_held(ElementId(i as u32))).collect();
+            let a = body.pos[held[0]][2];
+            if held.iter().any(|&h| body.pos[h][2] != a) {
+                // The pins stop the jaws (step 1 464): the centre creeps on alone, which one height
+                // does not model.
+                break;
+            }
+            if held != seeds {
+                d = distances(body, &held);
+                seeds = held;
+            }
+            checked += 1;
+            for (j, p) in body.pos.iter().enumerate() {
+                let (z, cone) = (p[2], a - d[j]);
+                assert!(
+                    z >= cone - 1e-6,
+                    "step {}: element {j} at {z} under the cone's {cone}",
+                    world.step_count()
+                );
+                if tissue.in_active[j] || region_before[j] {
+                    continue;
+                }
+                let model = z_before[j].max(cone);
+                assert!(
+                    z >= model - 1e-6,
+                    "step {}: element {j} outside the region at {z}, under the lift's least height {model}",
+                    world.step_count()
+                );
+                if z > model + 1e-6 {
+                    over += 1;
+                    worst = worst.max((z - model) / spacing);
+                }
+                rose += usize::from(z > z_before[j] + 1e-6);
+            }
+        }
+        // 5 245 of 294 692 at 96 x 72, by up to 0.079 spacings: the raise lifts an element relaxation
+        // moved since by the whole rise, and the completion carries that on.
+        assert!(checked > 150, "{checked} steps of the final lift checked");
+        assert!(rose > 100_000 && over * 100 < 3 * rose, "{over} of {rose} rises above the model's height");
+        assert!(worst < 0.15, "a rise {worst} spacings above the model's height");
+    }
 }
