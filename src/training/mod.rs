@@ -768,14 +768,14 @@ impl Assessor {
 }
 
 /// What to do about the layers' separation over the target (`separation` and `goal` in metres), with
-/// the figure the assessment panel shows: below the rest gap (the lifted layer pushed onto the one
+/// the figure the assessment panel shows: below the rest gap (the lifted layer pushed towards the one
 /// under it) it says so, rather than "0.0 mm apart" beside a panel's "-1.1 mm".
 fn separation_advice(upper: &str, separation: f32, goal: f32) -> String {
     let (mm, goal_mm) = (1000.0 * separation, 1000.0 * goal);
     if (10.0 * mm).round() < 0.0 {
         format!(
-            "Lift the {upper} clear: it is pressed {:.1} mm onto the layer under it over the target \
-             (separation {mm:.1} mm), the goal is {goal_mm:.1} mm apart.",
+            "Lift the {upper} clear: it is pressed {:.1} mm closer to the layer under it than at rest \
+             over the target (separation {mm:.1} mm), the goal is {goal_mm:.1} mm apart.",
             -mm
         )
     } else {
@@ -818,8 +818,8 @@ mod tests {
         );
         assert_eq!(
             separation_advice("dura", -0.0011, 0.004),
-            "Lift the dura clear: it is pressed 1.1 mm onto the layer under it over the target \
-             (separation -1.1 mm), the goal is 4.0 mm apart."
+            "Lift the dura clear: it is pressed 1.1 mm closer to the layer under it than at rest \
+             over the target (separation -1.1 mm), the goal is 4.0 mm apart."
         );
         // What rounds to zero reads as zero apart, not as pressed by 0.0 mm.
         assert!(separation_advice("dura", -1e-5, 0.004).contains("are 0.0 mm apart"));
