@@ -117,24 +117,38 @@ fn a_point_lift_rises_around_the_forceps() {
     }
 }
 
-/// A lift let go comes back down: with the forceps released, nothing holds the dura up, and
-/// relaxation of the whole body takes it back to rest (5 mm to 0.17 mm in 1 000 sweeps at 64 x 48).
-/// Not so today (2026-11-29, issue 14 point 4): the disturbed region grows only with the chain
-/// reactions' moves, so once they stop the region's edge holds what lies beyond it, the region
-/// empties within ten steps and the tent stays 5 mm up for good. Growing the region with
-/// relaxation's own moves brings it down (to 0.22 mm in 4 000 steps at 64 x 48, in 10 000 at
-/// 128 x 96: Gauss-Seidel's sweeps grow with the square of the resolution) but makes a held lift's
-/// region most of the sheet; it needs a relaxation that converges at every resolution (a multigrid)
-/// and a region that ends in physical terms. Run with `--ignored` to see it fail.
-#[test]
-#[ignore = "a released lift stays up: the region does not follow relaxation (issue 14, point 4)"]
-fn a_released_lift_comes_back_down() {
-    let (nu, nv) = (64, 48);
+/// A lift let go comes back down, at every resolution: with the forceps released nothing holds the
+/// dura up, and the relaxation takes it back to rest. What the lift displaced joins the disturbed
+/// region when the jaws open (everything joined to them through elements displaced more than a
+/// micrometre), and the region's relaxation adds a coarse-grid correction until it settles
+/// (`chainmail/relax/coarse.rs`): Gauss-Seidel sweeps alone need four times the sweeps at each
+/// doubling of the resolution (5 mm to 0.17 mm in 1 000 whole-body sweeps at 64 x 48), and before
+/// 2026-11-29 the region emptied within ten steps of the release and the tent stood 5 mm up for good.
+/// Measured on the release build (2026-11-29): the centre is under 1 µm up 10 steps after the release
+/// at 64 x 48, 0.08 mm after 30 at 128 x 96 and 0.05 mm after 300 at 256 x 192; the test allows 1 mm
+/// after 1 s, and that the region empties (the settling ends) within 5 s.
+fn released_lift_comes_back_down(nu: u32, nv: u32) {
     let (mut world, centre) = lift_centre(nu, nv, 0.005, 500);
     world.push(Command::Release);
-    for _ in 0..5_000 {
+    for _ in 0..1_000 {
         world.step();
     }
     let at_centre = height(&world, nu as usize, nv as usize, centre[0], centre[1]);
-    assert!(at_centre < 0.001, "5 s after the release the dura stands {} mm up", 1e3 * at_centre);
+    assert!(at_centre.abs() < 0.001, "1 s after the release the dura stands {} mm up", 1e3 * at_centre);
+    for _ in 0..4_000 {
+        world.step();
+    }
+    let at_centre = height(&world, nu as usize, nv as usize, centre[0], centre[1]);
+    assert!(at_centre.abs() < 1e-4, "5 s after the release the dura stands {} mm up", 1e3 * at_centre);
+    assert_eq!(world.tissue().active_count(), 0, "5 s after the release the tissue still settles");
+}
+
+#[test]
+fn a_released_lift_comes_back_down() {
+    released_lift_comes_back_down(64, 48);
+}
+
+#[test]
+fn a_released_lift_comes_back_down_at_128_x_96() {
+    released_lift_comes_back_down(128, 96);
 }

@@ -70,7 +70,7 @@ pub use pairs::NormalPair;
 pub(crate) use reaction::has_bit;
 pub use reaction::{Deformation, Pass};
 pub(crate) use relax::sweeps_within;
-pub use relax::{RelaxBudget, RelaxRegion, RelaxReport};
+pub use relax::{Coarse, RelaxBudget, RelaxRegion, RelaxReport};
 pub use schedule::worker_pool;
 pub use simd::{SIMD_ENV, SimdLevel};
 pub use workspace::Workspace;

@@ -557,6 +557,11 @@ impl Tissue {
             scan_table,
             scan_spare: Default::default(),
             growth: Default::default(),
+            coarse: Default::default(),
+            settling: false,
+            settle_steps: 0,
+            fill_bits: Vec::new(),
+            fill_stack: Vec::new(),
             kind_links,
             cut_candidates: Vec::new(),
             drift_max: 0.0,
@@ -611,6 +616,7 @@ impl Tissue {
         };
         tissue.forces = super::force::LinkFactors::of(&tissue);
         tissue.growth.fit(tissue.body.lattice());
+        tissue.fit_coarse();
         tissue.repair.fit(n);
         tissue.fibre_sites = tissue.rest_fibre_sites();
         tissue

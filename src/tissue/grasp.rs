@@ -174,8 +174,10 @@ impl Tissue {
     pub fn release_grasp(&mut self) {
         let held = std::mem::take(&mut self.jaws.held);
         for &(i, _) in &held {
-            self.set_held(i, false);
+            self.hold(i, false);
         }
+        // What the jaws held up settles (`settle.rs`).
+        self.settle_from(held.iter().map(|h| h.0));
         self.jaws.held = held;
         self.jaws.held.clear();
     }

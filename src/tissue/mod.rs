@@ -255,6 +255,16 @@ pub struct Tissue {
     /// The lattice's common patterns of neighbours, for growing the region a word at a time
     /// (`grow.rs`).
     pub(crate) growth: grow::Growth,
+    /// The aggregates of the region's coarse-grid correction (`settle.rs`), made on first use.
+    pub(crate) coarse: crate::chainmail::Coarse,
+    /// Whether tissue let go is settling: the region's relaxation adds the coarse correction
+    /// (`settle.rs`). Set by a release, cleared by a grasp and once the region is empty.
+    pub(crate) settling: bool,
+    /// Steps the current settling has lasted.
+    pub(crate) settle_steps: u32,
+    /// The fill of a release (`Tissue::settle_from`): elements found, as bits, and those to visit.
+    pub(crate) fill_bits: Vec<u64>,
+    pub(crate) fill_stack: Vec<u32>,
     /// Scratch of the pieces of a tear scan split over two threads (see `scan.rs`).
     pub(crate) scan_spare: scan::ScanSpare,
     /// World rest length of each link, metres (for stretch and tearing).
@@ -460,6 +470,17 @@ impl Tissue {
 
     /// Marks an element as held by an instrument (or lets it go).
     pub fn set_held(&mut self, e: ElementId, held: bool) {
+        self.hold(e, held);
+        if held {
+            self.settling = false;
+        } else {
+            // What is let go settles (`settle.rs`): nothing else would move it back.
+            self.settle_from([e]);
+        }
+    }
+
+    /// [`Tissue::set_held`] without the settling of a release.
+    pub(crate) fn hold(&mut self, e: ElementId, held: bool) {
         // Out-of-range ids are ignored: the instrument only holds ids this tissue issued.
         let _ = self.body.set_held(e, held);
         if !held && let Model::Fem(fem) = &mut self.model {
@@ -632,7 +653,16 @@ impl Tissue {
     /// The probe: a ball of `radius` at world point `tip` pushes the surface of the outermost layer
     /// (layered) or the top of a volume where it meets it. Returns the elements moved.
     pub fn push(&mut self, tip: [f32; 3], radius: f32) -> u32 {
-        self.probe_contact = None;
+        let touched = self.probe_contact.take();
+        let moved = self.push_inner(tip, radius);
+        // What the probe pressed in and no longer touches settles back (`settle.rs`).
+        if let (Some(e), None) = (touched, self.probe_contact) {
+            self.settle_from([e]);
+        }
+        moved
+    }
+
+    fn push_inner(&mut self, tip: [f32; 3], radius: f32) -> u32 {
         let Some(e) = self.nearest_element(tip, Some(0)) else { return 0 };
         let Ok(p) = self.body.position(e) else { return 0 };
         let t = self.geometry.to_lattice(tip, p[0]);
@@ -687,7 +717,7 @@ impl Tissue {
         }
         self.step_moved = 0;
         self.repair.next_step();
-        if self.settled {
+        if self.settled && !self.settling {
             for e in self.active.drain(..) {
                 self.in_active[e.index()] = false;
                 self.last_move[e.index()] = 0.0;
@@ -697,6 +727,9 @@ impl Tissue {
         }
         self.settled = false;
         self.region_scan = None;
+        if self.active.is_empty() {
+            self.settling = false;
+        }
     }
 
     /// Relaxes the whole body within `budget` (for spare time, and for tests).

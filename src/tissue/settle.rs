@@ -41,6 +41,8 @@ impl Tissue {
         self.last_move.resize(self.body.element_count(), 0.0);
         // The step's chain reactions have done part of its work already.
         let updates = REGION_UPDATES.saturating_sub(self.step_moved).max(REGION_UPDATES_LEAST);
+        // Settling tissue shares the updates with the coarse correction.
+        let updates = if self.settling { updates / 2 } else { updates };
         let sweeps = (updates / self.active.len().max(1)).max(1);
         let budget = RelaxBudget { max_sweeps: budget.max_sweeps.min(sweeps as u32), ..budget };
         // A region larger than the step's updates: the next `updates` elements from the cursor,
@@ -73,7 +75,48 @@ impl Tissue {
         if partial {
             report.converged = false;
         }
+        if self.settling {
+            self.settle_work(updates, &mut report);
+        }
         report
+    }
+
+    /// Makes the coarse correction's aggregates (once per lattice): they follow the links within a
+    /// layer, so that no aggregate spans a lifted layer and the one under it.
+    pub(crate) fn fit_coarse(&mut self) {
+        let kinds = &self.link_kind;
+        self.coarse.fit(&self.body, |l| matches!(kinds.get(l), Some(super::LinkKind::Layer(_)) | None));
+    }
+
+    /// A step's share of the coarse correction of settling tissue (`updates` of work): the elements
+    /// it moves stay in (or join) the region; a correction that moved nothing more than
+    /// [`SETTLE_MOVE`] ends the settling, as does [`SETTLE_STEPS`] of it.
+    fn settle_work(&mut self, updates: usize, report: &mut RelaxReport) {
+        self.fit_coarse();
+        let (last_move, in_active, active) = (&mut self.last_move, &mut self.in_active, &mut self.active);
+        let (joined, repair) = (&mut self.region_scratch, &mut self.repair);
+        joined.clear();
+        let work = self.body.coarse_work(&mut self.coarse, active, updates, |i, was, m| {
+            repair.note(i as u32, was);
+            if let Some(l) = last_move.get_mut(i) {
+                *l = l.max(m);
+            }
+            if let Some(a) = in_active.get_mut(i)
+                && !*a
+            {
+                *a = true;
+                joined.push(crate::chainmail::ElementId(i as u32));
+            }
+        });
+        active.append(joined);
+        if work.work > 0 {
+            self.body.note_relaxation();
+            report.converged = false;
+        }
+        self.settle_steps += 1;
+        if work.finished.is_some_and(|m| m <= SETTLE_MOVE) || self.settle_steps >= SETTLE_STEPS {
+            self.settling = false;
+        }
     }
 
     /// Puts the disturbed region in element order, so that sweeps (and the contact and tear checks
@@ -164,6 +207,11 @@ impl Tissue {
     /// Shrinks the disturbed region to the elements still moving and their neighbours (elements put
     /// in since the last relaxation stay).
     pub(crate) fn prune_region(&mut self) {
+        // Settling tissue keeps its region until the correction says it has settled: its sweeps'
+        // moves shrink long before the tissue is back (`settle_work`).
+        if self.settling {
+            return;
+        }
         let mut keep = std::mem::take(&mut self.region_scratch);
         keep.clear();
         // The limits' repair's scan of the region found what it keeps, if nothing has moved, been
@@ -203,5 +251,70 @@ impl Tissue {
         debug_assert!(kept_at.next().is_none(), "the kept elements are not a subsequence of the region");
         std::mem::swap(&mut self.active, &mut keep);
         self.region_scratch = keep;
+    }
+}
+
+/// Displacement from rest (metres, lattice units) that makes an element part of what a release lets
+/// go: a micrometre, far below what a trainee can see.
+pub const DISPLACED: f32 = 1e-6;
+
+/// A coarse correction that moves no element more than this (metres) ends a settling: what is left
+/// is a few micrometres, and the sweeps go on with it as with any region.
+pub const SETTLE_MOVE: f32 = 1e-6;
+
+/// Most steps a settling lasts (5 s at 1 kHz): tissue its links' limits hold away from its
+/// equilibrium would otherwise keep the correction going for good.
+pub const SETTLE_STEPS: u32 = 5000;
+
+impl Tissue {
+    /// Lets the tissue around `seeds` settle: every element joined to a seed through elements
+    /// displaced from rest by more than [`DISPLACED`] joins the disturbed region (a tent the forceps
+    /// held up, a dent the probe pressed in: found by a fill over the lattice's adjacency, so it costs
+    /// what is displaced), and the region's relaxation adds the coarse-grid correction until it
+    /// settles (`chainmail/relax/coarse.rs`): released tissue goes back to its equilibrium in about
+    /// the same time at every resolution. The chain reactions that put it there left nothing else to
+    /// move it back.
+    pub(crate) fn settle_from(&mut self, seeds: impl IntoIterator<Item = crate::chainmail::ElementId>) {
+        if self.is_fem() {
+            return;
+        }
+        let n = self.body.element_count();
+        self.fill_bits.clear();
+        self.fill_bits.resize(n.div_ceil(64), 0);
+        let mut stack = std::mem::take(&mut self.fill_stack);
+        stack.clear();
+        let (pos, rest) = (self.body.positions(), self.body.lattice().rest_positions());
+        let displaced = |i: usize| (0..3).any(|c| (pos[i][c] - rest[i][c]).abs() > DISPLACED);
+        for e in seeds {
+            let i = e.index();
+            if i < n && self.fill_bits[i / 64] & (1 << (i % 64)) == 0 {
+                self.fill_bits[i / 64] |= 1 << (i % 64);
+                stack.push(i as u32);
+            }
+        }
+        let mut found = Vec::new();
+        let lat = self.body.lattice();
+        while let Some(i) = stack.pop() {
+            let i = i as usize;
+            found.push(i as u32);
+            let (s0, s1) = (lat.adj_start[i] as usize, lat.adj_start[i + 1] as usize);
+            for &j in &lat.adj_nbr[s0..s1] {
+                let j = j as usize;
+                if self.fill_bits[j / 64] & (1 << (j % 64)) == 0 && displaced(j) {
+                    self.fill_bits[j / 64] |= 1 << (j % 64);
+                    stack.push(j as u32);
+                }
+            }
+        }
+        for &i in &found {
+            self.activate(i);
+        }
+        self.fill_stack = stack;
+        if !found.is_empty() {
+            // A correction under way started from another region: the next one takes this one.
+            self.coarse.cancel();
+            self.settling = true;
+            self.settle_steps = 0;
+        }
     }
 }

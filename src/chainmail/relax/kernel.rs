@@ -54,7 +54,7 @@ impl Body {
     /// [`Body::relaxed_in`] with the intersection of the element's link boxes; `None` for a fixed
     /// element.
     #[inline(always)]
-    fn relaxed_bounded_in(
+    pub(super) fn relaxed_bounded_in(
         &self,
         i: usize,
         pos_of: impl Fn(usize) -> [f32; 3],

@@ -15,9 +15,11 @@ use web_time::Instant;
 use super::body::{Body, FIXED};
 use super::ids::ElementId;
 use super::workspace::Workspace;
+pub use coarse::Coarse;
 use kernel::{max_change, relaxed_row};
 
 mod bands;
+mod coarse;
 mod grid;
 mod kernel;
 mod region;
