@@ -45,15 +45,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     world.push(Command::Release);
     println!("step\tmm_from_rest\tregion\tstep_us");
     let mut times = Vec::with_capacity(5000);
+    let mut settled = None;
     for s in 1..=5000u32 {
         let t0 = Instant::now();
         world.step();
         let us = t0.elapsed().as_secs_f64() * 1e6;
         times.push(us);
+        if settled.is_none() && world.tissue().active_count() == 0 {
+            settled = Some(s);
+        }
         if s <= 10 || s % 50 == 0 {
             println!("{s}\t{:.4}\t{}\t{us:.0}", from_rest(&world), world.tissue().active_count());
         }
     }
+    match settled {
+        Some(s) => println!("settled (the region empty) at step {s}"),
+        None => println!("still settling after 5 000 steps: {} elements", world.tissue().active_count()),
+    }
+    // The steps while the tissue settled.
+    let settling = &mut times[..settled.map_or(5000, |s| s as usize - 1)];
+    settling.sort_by(f64::total_cmp);
+    let n = settling.len().max(1);
+    println!(
+        "settling steps: mean {:.0} us, p50 {:.0}, p99 {:.0}",
+        settling.iter().sum::<f64>() / n as f64,
+        settling.get(n / 2).copied().unwrap_or(0.0),
+        settling.get((n - 1) * 99 / 100).copied().unwrap_or(0.0)
+    );
     times.sort_by(f64::total_cmp);
     let q = |p: f64| times[((times.len() - 1) as f64 * p) as usize];
     let mean = times.iter().sum::<f64>() / times.len() as f64;

@@ -560,8 +560,10 @@ impl Tissue {
             coarse: Default::default(),
             settling: false,
             settle_steps: 0,
-            fill_bits: Vec::new(),
-            fill_stack: Vec::new(),
+            // (Written now, so that a release meets no page the system has yet to give.)
+            fill_bits: crate::chainmail::touched(n.div_ceil(64), 0),
+            fill_stack: touched_empty(n),
+            fill_found: touched_empty(n),
             kind_links,
             cut_candidates: Vec::new(),
             drift_max: 0.0,
@@ -621,6 +623,13 @@ impl Tissue {
         tissue.fibre_sites = tissue.rest_fibre_sites();
         tissue
     }
+}
+
+/// An empty vector with room for `n` elements, its memory written.
+fn touched_empty(n: usize) -> Vec<u32> {
+    let mut v = crate::chainmail::touched(n, 0);
+    v.clear();
+    v
 }
 
 /// A range of `u` and a range of `v`, as fractions.

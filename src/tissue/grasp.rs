@@ -117,7 +117,8 @@ impl Tissue {
     /// layers, all three coordinates in a volume) are held. Pinned elements stay pinned and are left
     /// out. Returns how many elements are held.
     pub fn grasp(&mut self, e: ElementId, jaw_width: f32) -> usize {
-        self.release_grasp();
+        // (What the jaws held before is let go without settling: the grasp ends any settling.)
+        self.open_jaws(false);
         let Ok(c) = self.body.position(e) else { return 0 };
         let reach2 = (0.5 * jaw_width).max(0.0).powi(2);
         let plane = matches!(self.geometry, Geometry::Surface(_));
@@ -170,14 +171,19 @@ impl Tissue {
         n
     }
 
-    /// Opens the jaws: every held element is let go.
+    /// Opens the jaws: every held element is let go, and what they held up settles (`settle.rs`).
     pub fn release_grasp(&mut self) {
+        self.open_jaws(true);
+    }
+
+    fn open_jaws(&mut self, settle: bool) {
         let held = std::mem::take(&mut self.jaws.held);
         for &(i, _) in &held {
             self.hold(i, false);
         }
-        // What the jaws held up settles (`settle.rs`).
-        self.settle_from(held.iter().map(|h| h.0));
+        if settle {
+            self.settle_from(held.iter().map(|h| h.0));
+        }
         self.jaws.held = held;
         self.jaws.held.clear();
     }

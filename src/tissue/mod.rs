@@ -265,6 +265,7 @@ pub struct Tissue {
     /// The fill of a release (`Tissue::settle_from`): elements found, as bits, and those to visit.
     pub(crate) fill_bits: Vec<u64>,
     pub(crate) fill_stack: Vec<u32>,
+    pub(crate) fill_found: Vec<u32>,
     /// Scratch of the pieces of a tear scan split over two threads (see `scan.rs`).
     pub(crate) scan_spare: scan::ScanSpare,
     /// World rest length of each link, metres (for stretch and tearing).

@@ -292,7 +292,8 @@ impl Tissue {
                 stack.push(i as u32);
             }
         }
-        let mut found = Vec::new();
+        let mut found = std::mem::take(&mut self.fill_found);
+        found.clear();
         let lat = self.body.lattice();
         while let Some(i) = stack.pop() {
             let i = i as usize;
@@ -310,7 +311,9 @@ impl Tissue {
             self.activate(i);
         }
         self.fill_stack = stack;
-        if !found.is_empty() {
+        let any = !found.is_empty();
+        self.fill_found = found;
+        if any {
             // A correction under way started from another region: the next one takes this one.
             self.coarse.cancel();
             self.settling = true;
