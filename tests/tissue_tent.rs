@@ -152,3 +152,30 @@ fn a_released_lift_comes_back_down() {
 fn a_released_lift_comes_back_down_at_128_x_96() {
     released_lift_comes_back_down(128, 96);
 }
+
+/// A dent the probe pressed comes back out once the probe leaves it: the last element it touched
+/// settles as a release does (64 x 48; the dent is 3 mm deep).
+#[test]
+fn a_probe_dent_comes_back_out() {
+    let (nu, nv) = (64, 48);
+    let mut world = world(nu, nv);
+    let t = world.tissue();
+    let first = t.layers()[0].first as usize;
+    let centre =
+        t.body().lattice().rest_positions()[first + (nv as usize / 2) * nu as usize + nu as usize / 2];
+    let top = t.surface_point(0.5, 0.5, t.body().lattice().rest_positions()[first][2]);
+    world.push(Command::Select(InstrumentKind::Probe));
+    for s in 0..=300 {
+        let f = s as f32 / 300.0;
+        world.push(Command::MoveTo([top[0], top[1] + 0.002 - f * 0.005, top[2]]));
+        world.step();
+    }
+    let pressed = height(&world, nu as usize, nv as usize, centre[0], centre[1]);
+    assert!(pressed < -0.002, "the probe pressed the dura {} mm", 1e3 * pressed);
+    world.push(Command::MoveTo([top[0], top[1] + 0.01, top[2]]));
+    for _ in 0..1_000 {
+        world.step();
+    }
+    let after = height(&world, nu as usize, nv as usize, centre[0], centre[1]);
+    assert!(after.abs() < 1e-4, "1 s after the probe left, the dent is {} mm deep", -1e3 * after);
+}
