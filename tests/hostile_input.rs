@@ -422,3 +422,32 @@ fn class13_far_points_are_refused() {
         assert!(e.contains("100 metres"), "{e}");
     }
 }
+
+// 14. The smallest layers `check` accepts build and play: two layers 2 elements wide have their
+//     fibres in one row, and the grid that finds links near a cut had a cell of 1e-19 m there (a
+//     grid of 10^17 cells: the build aborted on the allocation). A grasp, a lift and a release each.
+#[test]
+fn class14_the_smallest_layers_build_and_play() {
+    use dissect::simulation::{Command as C, InstrumentKind};
+    for (nu, nv) in [(2, 2), (3, 2), (2, 5)] {
+        let mut scene = Scene::load(root().join("scenes/meninges.ron")).expect("bundled");
+        if let dissect::scene::Tissue::Layers(l) = &mut scene.tissue {
+            l.resolution = [nu, nv];
+        }
+        let mut world = scene.build_world(false).expect("builds");
+        let t = world.tissue();
+        let top = t.body().lattice().rest_positions()[t.layers()[0].first as usize][2];
+        let dura = t.surface_point(0.5, 0.5, top);
+        world.push(C::Select(InstrumentKind::Forceps));
+        world.push(C::MoveTo(dura));
+        world.push(C::Grasp);
+        for s in 0..50 {
+            world.push(C::MoveTo([dura[0], dura[1] + 0.0001 * s as f32, dura[2]]));
+            world.step();
+        }
+        world.push(C::Release);
+        for _ in 0..50 {
+            world.step();
+        }
+    }
+}

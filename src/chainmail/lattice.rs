@@ -11,8 +11,10 @@ pub const MAX_ELEMENTS: usize = 1 << 24;
 /// 1024 × 512 in two layers (1 Mi elements) hold 607 MiB once built and 610 MiB after 20 steps
 /// (2026-11-24). The body's positions, rest, links' ends, offsets, boxes and materials, adjacency and
 /// slot rows, the workspace's scratch, a layer's normal pairs (partners, bounds, the links their paths
-/// use: about 200) and the tissue's tear-scan table, link grids and region (the rest).
-pub const BYTES_PER_ELEMENT: usize = 600;
+/// use: about 200) and the tissue's tear-scan table, link grids and region (the rest). Since
+/// 2026-11-29 about 100 more: the settling's coarse-grid correction (its aggregates and scratch;
+/// `dissect run` of the careful exercise at 512 × 384 peaked at 613 MB before it and 653 MB after).
+pub const BYTES_PER_ELEMENT: usize = 700;
 
 /// Bit set on an adjacency entry's link when the element owning the entry is the link's `b` end.
 pub(crate) const SIDE_B: u32 = 1 << 31;

@@ -160,7 +160,7 @@ fn color(at: &FieldPath, c: [f32; 4]) -> Result<(), Problem> {
     Ok(())
 }
 
-/// Most elements a scene may have, in all its layers (a 1024 × 1024 sheet): about 600 MiB of
+/// Most elements a scene may have, in all its layers (a 1024 × 1024 sheet): about 700 MiB of
 /// simulation state, a renderer's largest buffer (24 bytes an element, the triangle indices) at 24 MiB,
 /// well inside the 256 MiB every device offers, and built, stepped and drawn in CI (the engine itself
 /// takes up to [`crate::chainmail::MAX_ELEMENTS`]).

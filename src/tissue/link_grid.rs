@@ -50,6 +50,9 @@ impl LinkGrid {
         let extent = [(hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0)];
         let area = (extent[0] * extent[1]).max(f32::MIN_POSITIVE);
         let mut cell = (area * per_cell / ids.len().max(1) as f32).sqrt();
+        // No more cells along an axis than links: links along one line (a layer 2 elements wide has
+        // its fibres in one row) have no area, and the cell from it was 1e-19 m, a grid of 10^17 cells.
+        cell = cell.max(extent[0].max(extent[1]) / ids.len().max(1) as f32);
         if wrapped || !cell.is_finite() || cell <= 0.0 || !lo[0].is_finite() {
             cell = f32::INFINITY;
         }
