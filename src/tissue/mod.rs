@@ -255,7 +255,8 @@ pub struct Tissue {
     /// The lattice's common patterns of neighbours, for growing the region a word at a time
     /// (`grow.rs`).
     pub(crate) growth: grow::Growth,
-    /// The aggregates of the region's coarse-grid correction (`settle.rs`), made on first use.
+    /// The aggregates of the region's coarse-grid correction (`settle.rs`), made when the tissue is
+    /// built.
     pub(crate) coarse: crate::chainmail::Coarse,
     /// Whether tissue let go is settling: the region's relaxation adds the coarse correction
     /// (`settle.rs`). Set by a release, cleared by a grasp and once the region is empty.

@@ -213,11 +213,6 @@ impl Coarse {
         self.shape = body.shape;
         self.elements = n;
     }
-
-    /// Levels made (0: not fitted).
-    pub fn levels(&self) -> usize {
-        self.levels.len()
-    }
 }
 
 /// A level of `count` aggregates from its members' `parent` and the edges below it as pairs of
