@@ -12,6 +12,9 @@ const MENINGES: &str = include_str!("../scenes/meninges.ron");
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = |i: usize, d: u32| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
     let (nu, nv, drag) = (arg(1, 128), arg(2, 96), arg(3, 0) == 1);
+    // The steps run on a worker of a pool of their own, as the trainer's simulation thread and
+    // `dissect run` run them (see `exercise_trace`).
+    let _pool = dissect::chainmail::worker_pool("trace")?;
     let mut scene = Scene::from_str(MENINGES, "scenes/meninges.ron")?;
     if let SceneTissue::Layers(l) = &mut scene.tissue {
         l.resolution = [nu, nv];
@@ -46,11 +49,39 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("step\tmm_from_rest\tregion\tstep_us");
     let mut times = Vec::with_capacity(5000);
     let mut settled = None;
+    let slow: Option<f64> = std::env::var("RELEASE_SLOW").ok().and_then(|t| t.parse().ok());
+    // Each phase's time summed over the settling steps.
+    let mut phases = [0f64; 7];
+    // `PERF_CTL=FIFO RELEASE_WINDOW=a,b`: writes `enable` and `disable` to that control FIFO around
+    // steps a..b after the release (`perf record -D -1 --control fifo:FIFO`).
+    let fifo = std::env::var("PERF_CTL").ok();
+    let window: Vec<u32> = std::env::var("RELEASE_WINDOW")
+        .map(|w| w.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .unwrap_or_default();
     for s in 1..=5000u32 {
+        if let (Some(f), [a, b]) = (&fifo, &window[..])
+            && (s == *a || s == *b)
+        {
+            std::fs::write(f, if s == *a { "enable\n" } else { "disable\n" })?;
+        }
         let t0 = Instant::now();
-        world.step();
+        let c = world.step();
         let us = t0.elapsed().as_secs_f64() * 1e6;
         times.push(us);
+        // `RELEASE_SLOW=us`: the phases of each step longer than that.
+        if slow.is_some_and(|t| us > t) {
+            let ph: Vec<String> = c.phase_us.iter().map(|p| format!("{p:.0}")).collect();
+            println!(
+                "slow step {s}: {us:.0} us, phases {}, region {}",
+                ph.join(" "),
+                world.tissue().active_count()
+            );
+        }
+        if settled.is_none() {
+            for (sum, &p) in phases.iter_mut().zip(&c.phase_us) {
+                *sum += f64::from(p);
+            }
+        }
         if settled.is_none() && world.tissue().active_count() == 0 {
             settled = Some(s);
         }
@@ -62,6 +93,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(s) => println!("settled (the region empty) at step {s}"),
         None => println!("still settling after 5 000 steps: {} elements", world.tissue().active_count()),
     }
+    let steps = f64::from(settled.unwrap_or(5000));
+    let each: Vec<String> = dissect::simulation::PHASES
+        .iter()
+        .zip(phases)
+        .map(|(name, sum)| format!("{name} {:.0}", sum / steps))
+        .collect();
+    println!("settling steps' phases (mean us): {}", each.join(", "));
+    // The longest steps, with their numbers (after the release).
+    let mut longest: Vec<(usize, f64)> = times.iter().copied().enumerate().map(|(i, t)| (i + 1, t)).collect();
+    longest.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let top: Vec<String> = longest.iter().take(12).map(|(s, t)| format!("{s}: {t:.0}")).collect();
+    println!("longest steps (step: us): {}", top.join(", "));
     // The steps while the tissue settled.
     let settling = &mut times[..settled.map_or(5000, |s| s as usize - 1)];
     settling.sort_by(f64::total_cmp);

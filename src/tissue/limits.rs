@@ -100,8 +100,12 @@ impl Repair {
             self.bounces = touched(n, 0);
             self.rank = touched(n, 0);
             self.stamp = 1;
-            self.suspects.clear();
-            self.carry.clear();
+            // Each holds an element at most once: room for all of them now, so that no step grows
+            // them (a released tent's correction notes every element of it in one step).
+            for list in [&mut self.suspects, &mut self.carry] {
+                *list = touched(n, 0);
+                list.clear();
+            }
             self.carried = 0;
         }
     }

@@ -25,16 +25,20 @@
 //!   is swept forty times. The region's correction is the first level's, prolonged, smoothed by one
 //!   damped Jacobi step (smoothed aggregation: the steps between aggregates become slopes), and
 //!   scaled by the energy's best step along it.
-//! - **Limits hold**: the correction is added element by element in the region's order, each element
+//! - **Limits hold**: the correction places element after element in the region's order, each element
 //!   kept within the boxes of its links around its neighbours as they will be (where a neighbour has
-//!   had its correction, where it is; where it is still to have it, where the correction will put
-//!   it). Each link then holds once its second end is placed. Around where neighbours would be pulled
+//!   been placed, its place; where it is still to be, where the correction will put it). Each link
+//!   then holds once its second end is placed. Around where neighbours would be pulled
 //!   apart beyond the limits, only the placed neighbours bound it (the in-place sweep's rule).
 //! - **Work follows the region, in steps**: a correction is a list of pieces (the fine residual, each
 //!   level's operator, each sweep, each restriction and prolongation), done in order over as many
 //!   calls as its work takes, a budget of element and aggregate visits each (counted, not timed, so
-//!   that runs stay bit for bit reproducible); only the last piece, adding the correction, is done
-//!   whole in one call, so that no step sees half of it.
+//!   that runs stay bit for bit reproducible). Placing the region's elements is a piece like the
+//!   others: it reads the positions and keeps each element's place aside, and only the last piece,
+//!   writing the places, is done whole in one call, so that no step sees half a correction. (Until
+//!   2026-11-29 the placing was done with the writing, whole in one step: 6.6 ms at 512 x 384, once
+//!   every 90 steps of a released lift's settling; a test now checks that a correction in pieces
+//!   ends where one done in a single call does, bit for bit.)
 //! - **Settling only**: the tissue runs it while tissue it let go settles (`tissue/settle.rs`);
 //!   while an instrument holds the tissue, its region's sweeps run as before (a correction there
 //!   doubled the careful exercise's mean step and moved its held tent toward the whole sheet's
@@ -57,6 +61,9 @@ const COARSEST_SWEEPS: usize = 40;
 const SMOOTH: usize = 2;
 /// Damping of the Jacobi step that smooths the prolonged correction (`Op::FineSmooth`).
 const SMOOTHING: f32 = 0.6;
+/// The bit of an element's stamp that says the current call has placed it (`Op::FinePlace`): calls
+/// are counted below it.
+const PLACED: u32 = 1 << 31;
 /// No edge (both ends in one aggregate).
 const NONE: u32 = u32::MAX;
 
@@ -102,7 +109,8 @@ pub struct Coarse {
     fine_stamp: Vec<u32>,
     /// Per element of the region (in its order): the residual and the prolonged correction.
     fine_res: Vec<[f32; 3]>,
-    /// Per element: the correction prolonged to it, then smoothed (valid where stamped).
+    /// Per element: the correction prolonged to it (`fine_e`, which once smoothed holds the place
+    /// `Op::FinePlace` gives the element), then smoothed (valid where stamped).
     fine_e: Vec<[f32; 3]>,
     fine_s: Vec<[f32; 3]>,
     /// The correction under way.
@@ -381,7 +389,10 @@ enum Op {
     FineSmooth,
     /// The energy's best step along the smoothed correction.
     FineDot,
-    /// The correction added to the region's elements, within their boxes.
+    /// Each element of the region placed where the correction puts it, within its links' boxes
+    /// (nothing moves yet).
+    FinePlace,
+    /// The places written: the whole region in one step, so that no step sees half a correction.
     FineApply,
 }
 
@@ -390,7 +401,8 @@ impl Op {
     /// sweep: about 40 ns at 256 x 192), as measured per item on the AVX-512 machine (2026-11-29,
     /// a released lift at 256 x 192): the fine residual 17 ns, the first level's operator 30, a
     /// level's rows 38 and the next level's operator 31, a level's sweep 13, its restriction 15,
-    /// prolongation 3 to 5, best step 16 to 22, the fine smoothing 24, and adding the correction 114.
+    /// prolongation 3 to 5, best step 16 to 22, the fine smoothing 24, placing the region's elements
+    /// 114, and writing their places 16 (at 512 x 384).
     fn cost8(self) -> usize {
         match self {
             Op::Fill(_) | Op::Add(_) | Op::FineFill => 1,
@@ -399,7 +411,8 @@ impl Op {
             Op::FineSmooth => 5,
             Op::Build | Op::Coarser(_) => 6,
             Op::Rows(_) => 8,
-            Op::FineApply => 22,
+            Op::FinePlace => 22,
+            Op::FineApply => 3,
         }
     }
 }
@@ -420,7 +433,8 @@ struct Job {
     den: [f64; 3],
     /// The largest move the correction made.
     moved: f32,
-    /// Work done beyond a step's budget, still to be paid by the steps after it (eighths).
+    /// Work the steps after a correction owe it before the next one starts (eighths): what adding
+    /// it took beyond its step's budget, and the sweeps' turn (see `coarse_work`).
     debt8: usize,
 }
 
@@ -441,6 +455,12 @@ impl Coarse {
     /// Whether a correction is under way.
     pub fn busy(&self) -> bool {
         self.job.as_ref().is_some_and(|j| j.op < j.ops.len())
+    }
+
+    /// Whether the correction under way is placing the region's elements (`Op::FinePlace`): what
+    /// moves them before their places are written is undone by the writing.
+    pub fn placing(&self) -> bool {
+        self.job.as_ref().is_some_and(|j| j.ops.get(j.op) == Some(&Op::FinePlace))
     }
 
     /// Drops the correction under way (the next call starts one afresh).
@@ -472,8 +492,8 @@ impl Body {
             if region.is_empty() {
                 return report;
             }
-            coarse.epoch = coarse.epoch.wrapping_add(1);
-            if coarse.epoch == 0 {
+            coarse.epoch += 1;
+            if coarse.epoch >= PLACED {
                 // The stamps wrapped: start them again.
                 coarse.fine_stamp.fill(0);
                 for l in &mut coarse.levels {
@@ -494,9 +514,9 @@ impl Body {
             coarse.job = Some(job);
         }
         let Some(mut job) = coarse.job.take() else { return report };
-        // Work in eighths of a relaxation update. Adding a correction, done whole in one step, is paid
-        // for by the steps after it: the correction pauses while they pay, so that its steps cost the
-        // budget on average.
+        // Work in eighths of a relaxation update. Writing a correction's places, done whole in one
+        // step, is paid for by the steps after it: the correction pauses while they pay, so that its
+        // steps cost the budget on average.
         let (budget8, mut work8) = (budget.saturating_mul(8), 0usize);
         let paid = job.debt8.min(budget8);
         job.debt8 -= paid;
@@ -504,9 +524,13 @@ impl Body {
         while work8 < budget8 && job.op < job.ops.len() {
             let op = job.ops[job.op];
             let items = match op {
-                Op::Mark | Op::Build | Op::FineFill | Op::FineSmooth | Op::FineDot | Op::FineApply => {
-                    job.region.len()
-                }
+                Op::Mark
+                | Op::Build
+                | Op::FineFill
+                | Op::FineSmooth
+                | Op::FineDot
+                | Op::FinePlace
+                | Op::FineApply => job.region.len(),
                 Op::Rows(l) | Op::Coarser(l) | Op::Sweep(l, _) | Op::Restrict(l) => {
                     coarse.levels[l].nodes.len()
                 }
@@ -525,6 +549,13 @@ impl Body {
             if op == Op::FineApply {
                 // (What this step's budget did not cover.)
                 job.debt8 = work8.saturating_sub(budget8);
+                // The sweeps' turn: the next correction waits while the steps' sweeps make as many
+                // updates as placing this one took (the tissue pauses its sweeps while the correction
+                // places: `Coarse::placing`), and smooth what it left, before it measures the residual
+                // (a multigrid's smoothing before each correction). Without the wait a released 5 mm
+                // lift settled in 625 steps at 256 x 192 and 2 201 at 512 x 384, with it 396 and
+                // 1 594 (2026-11-29).
+                job.debt8 += items * Op::FinePlace.cost8();
             }
             self.coarse_op(coarse, &mut job, op, range, &mut moved);
             job.at = end;
@@ -566,7 +597,7 @@ impl Body {
                         job.ops.extend([Op::Fill(k), Op::Dot(k), Op::Add(k)]);
                         job.ops.extend(std::iter::repeat_n(Op::Sweep(k, true), SMOOTH));
                     }
-                    job.ops.extend([Op::FineFill, Op::FineSmooth, Op::FineDot, Op::FineApply]);
+                    job.ops.extend([Op::FineFill, Op::FineSmooth, Op::FineDot, Op::FinePlace, Op::FineApply]);
                 }
             }
             Op::Dot(_) | Op::FineDot => job.alpha = alpha_of(job.num, job.den),
@@ -765,39 +796,61 @@ impl Body {
                     }
                 }
             }
-            Op::FineApply => {
-                // Added element by element in the region's order, each kept within the boxes of its
-                // links around its neighbours as they will be: where the neighbour has had its
-                // correction, where it is; where it is still to have it, where the correction puts
-                // it. Each link then holds once its second end has had its correction (that end was
-                // kept within the box around the first as it is), and a smooth correction, which
-                // moves neighbours alike, is cut short only where a link would have to leave its
-                // box. An element held or pinned since the correction started stays.
+            Op::FinePlace => {
+                // Placed element by element in the region's order, each kept within the boxes of its
+                // links around its neighbours as they will be: where the neighbour has been placed,
+                // its place; where it is still to be, where the correction puts it; outside the
+                // correction, where it is. Each link then holds once its second end is placed (that
+                // end was kept within the box around the first's place), and a smooth correction,
+                // which moves neighbours alike, is cut short only where a link would have to leave its
+                // box. The places are kept (`fine_e`, free once smoothed) and written by
+                // `Op::FineApply`: nothing moves until the whole region is placed, so the placing
+                // can take several steps.
                 let alpha = job.alpha;
+                let placed = epoch | PLACED;
                 for t in range {
                     let i = region[t].index();
                     if i >= n || coarse.fine_stamp[i] != epoch {
                         continue;
                     }
-                    coarse.fine_stamp[i] = 0;
+                    let p = self.pos[i];
                     if self.flags[i] & FIXED != 0 {
+                        coarse.fine_stamp[i] = 0;
                         continue;
                     }
-                    let (stamp, fs, pos) = (&coarse.fine_stamp, &coarse.fine_s, &self.pos);
+                    coarse.fine_e[i] = p;
+                    coarse.fine_stamp[i] = placed;
+                    let (stamp, fs, fq, pos) =
+                        (&coarse.fine_stamp, &coarse.fine_s, &coarse.fine_e, &self.pos);
                     let ahead = |j: usize| {
-                        let (p, e) = (pos[j], fs[j]);
-                        if stamp[j] == epoch { std::array::from_fn(|c| p[c] + alpha[c] * e[c]) } else { p }
+                        let s = stamp[j];
+                        if s == epoch {
+                            let (p, e) = (pos[j], fs[j]);
+                            std::array::from_fn(|c| p[c] + alpha[c] * e[c])
+                        } else if s == placed {
+                            fq[j]
+                        } else {
+                            pos[j]
+                        }
                     };
                     let Some((_, lo, hi)) = self.relaxed_bounded_in(i, ahead) else { continue };
-                    let (p, d) = (self.pos[i], coarse.fine_s[i]);
+                    let d = fs[i];
                     let goal: [f32; 3] = std::array::from_fn(|c| p[c] + alpha[c] * d[c]);
                     let mut q = goal;
                     if (0..3).any(|c| lo[c] > hi[c]) {
                         // No place within the boxes around where the neighbours will be: within those
-                        // around the neighbours that have had their correction (and the elements
-                        // outside it) only, the in-place sweep's boxes (a neighbour at NaN bounds
-                        // nothing).
-                        let settled = |j: usize| if stamp[j] == epoch { [f32::NAN; 3] } else { pos[j] };
+                        // around the neighbours placed (and the elements outside the correction)
+                        // only, the in-place sweep's boxes (a neighbour at NaN bounds nothing).
+                        let settled = |j: usize| {
+                            let s = stamp[j];
+                            if s == epoch {
+                                [f32::NAN; 3]
+                            } else if s == placed {
+                                fq[j]
+                            } else {
+                                pos[j]
+                            }
+                        };
                         let Some((_, lo, hi)) = self.relaxed_bounded_in(i, settled) else { continue };
                         // Where even those leave no place (bounds along the normal that the neighbours'
                         // corrections have pulled apart), halfway between the bounds that cross: the
@@ -814,6 +867,23 @@ impl Body {
                             q[c] = goal[c].clamp(lo[c], hi[c]);
                         }
                     }
+                    coarse.fine_e[i] = q;
+                }
+            }
+            Op::FineApply => {
+                // The places written, in the region's order. An element held or pinned since it was
+                // placed stays.
+                let placed = epoch | PLACED;
+                for t in range {
+                    let i = region[t].index();
+                    if i >= n || coarse.fine_stamp[i] != placed {
+                        continue;
+                    }
+                    coarse.fine_stamp[i] = 0;
+                    if self.flags[i] & FIXED != 0 {
+                        continue;
+                    }
+                    let (p, q) = (self.pos[i], coarse.fine_e[i]);
                     let m = (q[0] - p[0]).abs().max((q[1] - p[1]).abs()).max((q[2] - p[2]).abs());
                     if m > 0.0 {
                         self.pos[i] = q;
@@ -905,6 +975,34 @@ mod tests {
             .zip(rest)
             .map(|(p, r)| (0..3).map(|c| (p[c] - r[c]).abs()).fold(0.0, f32::max))
             .fold(0.0, f32::max)
+    }
+
+    /// A correction done over many small calls (as settling does it, a step's budget each) ends where
+    /// one done in a single call ends, bit for bit, and moves nothing before its last piece: the
+    /// pieces, the placing included, only read the positions, and the places are written at once.
+    #[test]
+    fn a_correction_in_pieces_is_the_correction_in_one() {
+        let start = released_lift(32, 28);
+        let region: Vec<ElementId> = (0..start.element_count() as u32).map(ElementId).collect();
+        let (mut whole, mut pieces) = (start.clone(), start.clone());
+        let (mut a, mut b) = (Coarse::default(), Coarse::default());
+        a.fit(&whole, |_| true);
+        b.fit(&pieces, |_| true);
+        let done = whole.coarse_work(&mut a, &region, usize::MAX, |_, _, _| {});
+        assert!(done.finished.is_some_and(|m| m > 1e-5), "the correction moved {:?}", done.finished);
+        let mut calls = 0;
+        loop {
+            calls += 1;
+            let before = pieces.positions().to_vec();
+            let r = pieces.coarse_work(&mut b, &region, 64, |_, _, _| {});
+            if r.finished.is_some() {
+                break;
+            }
+            assert_eq!(pieces.positions(), &before[..], "call {calls} moved elements before the last piece");
+            assert!(calls < 100_000, "the correction never finished");
+        }
+        assert!(calls > 10, "the correction took {calls} calls");
+        assert_eq!(whole.positions(), pieces.positions());
     }
 
     /// The correction against its reference, the in-place sweep: a released lift, whose equilibrium
