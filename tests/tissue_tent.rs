@@ -124,9 +124,9 @@ fn a_point_lift_rises_around_the_forceps() {
 /// (`chainmail/relax/coarse.rs`): Gauss-Seidel sweeps alone need four times the sweeps at each
 /// doubling of the resolution (5 mm to 0.17 mm in 1 000 whole-body sweeps at 64 x 48), and before
 /// 2026-11-29 the region emptied within ten steps of the release and the tent stood 5 mm up for good.
-/// Measured on the release build (2026-11-29, `examples/release_trace`): the grasped element is within
-/// 1 µm of rest 10 steps after the release at 64 x 48, 0.0007 mm after 50 at 128 x 96 and 0.0012 mm
-/// after 300 at 256 x 192; the test allows 1 mm after 1 s, and asks that the settling has ended (the
+/// Measured on the release build (2026-11-29, the nineteenth session on issue 14,
+/// `examples/release_trace`): the grasped element is 2 µm from rest 10 steps after the release at
+/// 64 x 48, 0.0024 mm after 50 at 128 x 96 and 0.0042 mm after 300 at 256 x 192; the test allows 1 mm after 1 s, and asks that the settling has ended (the
 /// region empty) and the centre is within 0.1 mm of rest after 5 s.
 fn released_lift_comes_back_down(nu: u32, nv: u32) {
     let (mut world, centre) = lift_centre(nu, nv, 0.005, 500);
