@@ -33,7 +33,7 @@ impl View for AssessmentPanel {
             }
             let target = format!("{:.0} % of {:.0} mm²", 100.0 * a.fibres, 1e6 * a.target_m2);
             row("target fibres cut", target, false);
-            row("separation", format!("{:.1} mm", 1000.0 * a.separation_m), false);
+            row("separation", format!("{:.1} mm", tenths(1000.0 * a.separation_m)), false);
             let fibres_out = format!("{:.1} mm²", 1e6 * a.connective_cut_outside_m2);
             row("fibres cut outside", fibres_out, a.connective_cut_outside > 0);
             let elsewhere = if a.incision.is_some() { "layers cut off the line" } else { "layers cut" };
@@ -72,5 +72,21 @@ impl View for AssessmentPanel {
         if frame.input_enabled && ui.button("Report (R)").clicked() {
             actions.push(Action::Report);
         }
+    }
+}
+
+/// `x` rounded to a tenth, a negative zero made positive: a separation a few micrometres under rest
+/// reads "0.0 mm", not "-0.0 mm" (the advice beside it says "0.0 mm apart").
+fn tenths(x: f32) -> f32 {
+    (10.0 * x).round() / 10.0 + 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_separation_just_under_rest_reads_zero() {
+        assert_eq!(format!("{:.1}", super::tenths(-0.004)), "0.0");
+        assert_eq!(format!("{:.1}", super::tenths(-0.06)), "-0.1");
+        assert_eq!(format!("{:.1}", super::tenths(1.26)), "1.3");
     }
 }
