@@ -180,3 +180,21 @@ fn a_probe_dent_comes_back_out() {
     let after = height(&world, nu as usize, nv as usize, centre[0], centre[1]);
     assert!(after.abs() < 1e-4, "1 s after the probe left, the dent is {} mm deep", -1e3 * after);
 }
+
+/// While a released lift settles at 256 x 192 (a tent of about 19 500 elements, more than four times
+/// a step's sweep), a step in which only the sweep moved part of the region checks contact and tears
+/// over the links it moved, not the whole tent's (`Tissue::scan_sweep_window`); in debug builds each
+/// such step also scans the whole region and asserts that it finds no tear the swept elements' check
+/// missed and no larger stretch. The settling tears nothing, and most of its steps are such steps.
+#[test]
+fn a_settling_checks_what_its_sweeps_moved() {
+    let (mut world, _) = lift_centre(256, 192, 0.005, 500);
+    world.push(Command::Release);
+    let mut torn = 0;
+    for _ in 0..300 {
+        torn += world.step().links_torn;
+    }
+    assert_eq!(torn, 0, "the settling tore links");
+    let checks = world.tissue().swept_checks();
+    assert!(checks > 150, "{checks} of 300 settling steps checked only what their sweep moved");
+}

@@ -597,6 +597,8 @@ impl Tissue {
             moved_bits: vec![0; n.div_ceil(64)],
             moved_pending: false,
             relax_cursor: 0,
+            swept: None,
+            swept_checks: 0,
             step_moved: 0,
             settled: false,
             cut_queue: Vec::new(),

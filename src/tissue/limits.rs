@@ -140,6 +140,12 @@ impl Repair {
         }
     }
 
+    /// Whether the step has moved nothing the repair hears of (no chain reaction, contact move or
+    /// direct write), and the last repair left nothing to check again.
+    pub(crate) fn quiet(&self) -> bool {
+        self.suspects.is_empty() && self.carried == 0 && !self.contact && !self.repaired
+    }
+
     /// Starts the next step: what the last one moved is forgotten, what its repair left is kept.
     pub(crate) fn next_step(&mut self) {
         self.suspects.clear();
@@ -194,6 +200,10 @@ impl Tissue {
         let unmet = self.body.take_pairs_unmet() > tol;
         let any = if r.repaired || unmet {
             true
+        } else if r.quiet() && self.scan_sweep_window() {
+            // Settling tissue whose sweep alone moved part of its region: the sweep keeps every link
+            // within its box, and the tear check has looked at the links it moved.
+            false
         } else {
             let boxes = super::BoxCheck { tol, stamps: &r.stamps, stamp: r.stamp };
             let found = self.scan_tears(Some(boxes)).1;

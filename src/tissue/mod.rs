@@ -79,6 +79,20 @@ fn tear_test(d2: f32, rest2: f32, ratio2: f32, layer: bool, max_stretch2: &mut f
     }
 }
 
+/// Whether the pair of element `e` (of a sheet of `sheet` elements a layer) is closer than `min_gap`
+/// along the normal, or its gap is NaN.
+#[inline(always)]
+fn gap_short(pos: &[[f32; 3]], sheet: u32, min_gap: f32, e: ElementId) -> bool {
+    let (l, u) = limits::partners(e.index(), sheet);
+    match (pos.get(l), pos.get(u)) {
+        (Some(pl), Some(pu)) => !matches!(
+            (pu[2] - pl[2]).partial_cmp(&min_gap),
+            Some(std::cmp::Ordering::Greater | std::cmp::Ordering::Equal)
+        ),
+        _ => false,
+    }
+}
+
 /// The first half of [`tear_test`]: whether the link may be the largest stretch so far or past its
 /// tear ratio. Most links are neither: a multiplication tells, a little on the safe side (`NEAR` lets
 /// through every link whose quotient could round above the bar), so the division runs only near the
@@ -299,6 +313,13 @@ pub struct Tissue {
     /// Where the next partial relaxation sweep of a large region starts (an element id; see
     /// `settle::REGION_UPDATES`).
     pub(crate) relax_cursor: u32,
+    /// This step's relaxation of settling tissue swept only part of its region: where in the region
+    /// (`active[start..]`, going round, `len` elements), if nothing else has moved this step
+    /// (`Tissue::sweep_window`).
+    pub(crate) swept: Option<(usize, usize)>,
+    /// Steps whose contact and tear checks looked only at what the sweep moved (see
+    /// `Tissue::scan_sweep_window`).
+    pub(crate) swept_checks: u64,
     /// Elements the step's chain reactions have moved so far (relaxation gets what is left of
     /// `settle::REGION_UPDATES`).
     pub(crate) step_moved: usize,
@@ -468,6 +489,12 @@ impl Tissue {
             Geometry::Volume => 2,
         };
         ((p[0] - lo[0]) / span[0], (p[k] - lo[k]) / span[k])
+    }
+
+    /// How many steps' contact and tear checks looked only at the elements the step's sweep moved
+    /// (settling tissue, see `settle.rs`), since the tissue was built.
+    pub fn swept_checks(&self) -> u64 {
+        self.swept_checks
     }
 
     /// Marks an element as held by an instrument (or lets it go).
@@ -729,6 +756,7 @@ impl Tissue {
         }
         self.settled = false;
         self.region_scan = None;
+        self.swept = None;
         if self.active.is_empty() {
             self.settling = false;
         }
@@ -752,6 +780,16 @@ impl Tissue {
             return 0;
         }
         let mut fixed = 0;
+        // Settling tissue whose sweep alone moved part of its region: only the pairs it moved can
+        // have come closer, and if none has, the rest of the region is as the last step left it.
+        if self.repair.quiet()
+            && let Some(window) = self.sweep_window()
+        {
+            let (pos, sheet, min_gap) = (&self.body.pos[..], self.sheet, self.min_gap);
+            if !window.iter().flat_map(|w| w.iter()).any(|&e| gap_short(pos, sheet, min_gap, e)) {
+                return 0;
+            }
+        }
         let count = self.active.len();
         let mut next = 0;
         while next < count {
@@ -760,16 +798,7 @@ impl Tissue {
             // passed over reading the positions' array alone, and only a short gap (or a NaN one) is
             // handled below.
             let (pos, sheet, min_gap) = (&self.body.pos[..], self.sheet, self.min_gap);
-            let short_at = self.active[next..count].iter().position(|&e| {
-                let (l, u) = limits::partners(e.index(), sheet);
-                match (pos.get(l), pos.get(u)) {
-                    (Some(pl), Some(pu)) => !matches!(
-                        (pu[2] - pl[2]).partial_cmp(&min_gap),
-                        Some(std::cmp::Ordering::Greater | std::cmp::Ordering::Equal)
-                    ),
-                    _ => false,
-                }
-            });
+            let short_at = self.active[next..count].iter().position(|&e| gap_short(pos, sheet, min_gap, e));
             let Some(at) = short_at else { break };
             let (l, u) = limits::partners(self.active[next + at].index(), self.sheet);
             next += at + 1;

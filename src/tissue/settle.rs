@@ -4,8 +4,8 @@
 //! the elements that still move (more than [`SETTLED`]) and their neighbours, so it shrinks again as
 //! the tissue settles, and relaxation, contact and the tear check cost what is still moving.
 
-use super::Tissue;
-use crate::chainmail::{RelaxBudget, RelaxReport};
+use super::{LinkKind, RegionScan, Tissue, scan};
+use crate::chainmail::{ElementId, INTACT, LinkId, RelaxBudget, RelaxReport, SIDE_B_BIT};
 
 /// An element that moved less than this in its last relaxation sweep (metres, lattice units) has
 /// settled: a tenth of a micrometre, far below what a trainee can see or an instrument feel.
@@ -52,6 +52,8 @@ impl Tissue {
             // places are written, so the step's updates are the correction's.
             let mut report = RelaxReport { converged: false, ..RelaxReport::default() };
             self.settle_work(2 * updates, &mut report);
+            // Nothing swept: unless the correction's places were written too, nothing has moved.
+            self.swept = Some((0, 0));
             return report;
         }
         let sweeps = (updates / self.active.len().max(1)).max(1);
@@ -66,6 +68,7 @@ impl Tissue {
             (0, self.active.len())
         };
         let partial = len < self.active.len();
+        self.swept = (self.settling && partial).then_some((start, len));
         if partial {
             let last = self.active[(start + len - 1) % self.active.len()];
             self.relax_cursor = last.0 + 1;
@@ -351,5 +354,128 @@ impl Tissue {
         }
         self.fill_stack = stack;
         self.fill_found = found;
+    }
+}
+
+impl Tissue {
+    /// The part of the region this step's sweep went over, if that sweep is all that has moved
+    /// elements since the last step's checks: settling tissue (its fill done) whose region is four
+    /// times a step's sweep or more (or a step that swept nothing: the correction placing), in a
+    /// step in which nothing else moved (the caller asks the limits'
+    /// repair whether anything did; contact asks it too). Two slices of the region: the sweep goes
+    /// round it.
+    pub(crate) fn sweep_window(&self) -> Option<[&[ElementId]; 2]> {
+        let (start, len) = self.swept?;
+        // (Its links are read element by element, from both ends: over a quarter of the region the
+        // region's own scan, from one end and on vectors, costs less.)
+        if !self.settling || self.filling() || len.saturating_mul(4) > self.active.len() {
+            return None;
+        }
+        let tail = self.active.get(start..)?;
+        Some(if len <= tail.len() {
+            [&tail[..len], &[][..]]
+        } else {
+            [tail, self.active.get(..len - tail.len())?]
+        })
+    }
+
+    /// The tear check of a step in which only the sweep moved elements ([`Tissue::sweep_window`]):
+    /// the links of the elements it swept, from both ends (every link whose length it changed), not
+    /// the whole region's; the others are as the last step's checks found them. Stands for the step
+    /// as the limits' repair's scan of the region does (`region_scan`): its tears (each once), the
+    /// largest stretch (the swept links', or the last figure if that is larger: while tissue settles
+    /// the region's figure falls only at a whole scan, a correction's step or contact's) and the drift
+    /// (the swept elements'; nothing else moved). Returns false (and does nothing) if the step is
+    /// not such a step. (Every step of a settling scanned the whole released tent until 2026-11-29:
+    /// 250 us a step at 256 x 192, 620 at 512 x 384.)
+    pub(crate) fn scan_sweep_window(&mut self) -> bool {
+        if self.sweep_window().is_none() {
+            return false;
+        }
+        let mut tear2 = std::mem::take(&mut self.tear_scratch);
+        scan::tear_ratios2_into(&self.body, &mut tear2);
+        let mut hits = std::mem::take(&mut self.tear_hits);
+        hits.clear();
+        let found = self.sweep_window().map(|window| {
+            let lat = self.body.lattice();
+            let (adj_start, adj_link, adj_nbr) = (&lat.adj_start[..], &lat.adj_link[..], &lat.adj_nbr[..]);
+            let (pos, state, material) =
+                (&self.body.pos[..], &self.body.link_state[..], &self.body.link_material[..]);
+            let (rest_len, kind, rest_pos) = (&self.rest_len[..], &self.link_kind[..], lat.rest_positions());
+            let geometry = self.geometry;
+            // (A flat surface's world is its lattice with the axes permuted, to the bit.)
+            let flat = matches!(geometry, super::Geometry::Surface(s) if s.is_flat());
+            let world = |p| {
+                glam::Vec3::from(if flat {
+                    crate::surface::Surface::flat_to_world(p)
+                } else {
+                    geometry.to_world(p)
+                })
+            };
+            let (mut max2, mut drift) = (0.0f32, 0.0f32);
+            for &id in window.iter().flat_map(|w| w.iter()) {
+                let e = id.index();
+                let (Some(&s0), Some(&s1), Some(&p), Some(r)) =
+                    (adj_start.get(e), adj_start.get(e + 1), pos.get(e), rest_pos.get(e))
+                else {
+                    continue;
+                };
+                drift = drift.max((p[0] - r[0]).abs().max((p[1] - r[1]).abs()));
+                let pa = world(p);
+                let slots = s0 as usize..s1 as usize;
+                let (links, nbrs) =
+                    (adj_link.get(slots.clone()).unwrap_or_default(), adj_nbr.get(slots).unwrap_or_default());
+                for (&raw, &y) in links.iter().zip(nbrs) {
+                    let l = (raw & !SIDE_B_BIT) as usize;
+                    if state.get(l) != Some(&INTACT) {
+                        continue;
+                    }
+                    let Some(&q) = pos.get(y as usize) else { continue };
+                    let rest = rest_len[l].max(f32::MIN_POSITIVE);
+                    let layer = matches!(kind[l], LinkKind::Layer(_));
+                    let ratio2 = tear2.get(material[l].index()).copied().unwrap_or(f32::INFINITY);
+                    let d2 = world(q).distance_squared(pa);
+                    super::tear_test(d2, rest * rest, ratio2, layer, &mut max2, || {
+                        hits.push(LinkId(l as u32))
+                    });
+                }
+            }
+            (max2, drift)
+        });
+        let done = found.is_some();
+        if let Some((max2, drift)) = found {
+            // A link between two swept elements is met from both.
+            hits.sort_unstable_by_key(|l| l.0);
+            hits.dedup();
+            let key = (self.body.motion(), self.body.revision());
+            let max_stretch2 = max2.max(self.max_stretch * self.max_stretch);
+            #[cfg(debug_assertions)]
+            self.check_sweep_window(&tear2, &hits, max_stretch2);
+            self.region_scan = Some(RegionScan { key, max_stretch2, drift });
+            self.swept_checks += 1;
+        }
+        self.tear_hits = hits;
+        self.tear_scratch = tear2;
+        done
+    }
+
+    /// The region's own scan beside the swept elements' (debug builds): every tear it finds is among
+    /// theirs, and its largest stretch is no more than the figure they give.
+    #[cfg(debug_assertions)]
+    fn check_sweep_window(&self, tear2: &[f32], hits: &[LinkId], max_stretch2: f32) {
+        let geometry = self.geometry;
+        let world = |p| glam::Vec3::from(geometry.to_world(p));
+        let (mut full, mut out) = (Vec::new(), super::ScanFound::default());
+        let m = self.scan_region::<false>(tear2, &mut full, world, &super::NO_BOXES, &[], &mut out);
+        for l in &full {
+            debug_assert!(
+                hits.binary_search_by_key(&l.0, |h| h.0).is_ok(),
+                "the swept elements' tear check missed {l:?}"
+            );
+        }
+        debug_assert!(
+            m <= max_stretch2 * (1.0 + 1e-5),
+            "the region's largest stretch {m} is over the swept's {max_stretch2}"
+        );
     }
 }
