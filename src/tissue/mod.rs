@@ -927,8 +927,18 @@ impl Tissue {
                 self.check_scan::<true>(&tear2, &hits, flat, &b, &wide, &out, m);
                 m
             }
-            (_, None) => self.scan_region::<false>(&tear2, &mut hits, general, &NO_BOXES, &wide, &mut out),
-            (_, Some(b)) => self.scan_region::<true>(&tear2, &mut hits, general, &b, &wide, &mut out),
+            (_, None) => self.scan_region::<false, false>(
+                &self.active,
+                &tear2,
+                &mut hits,
+                general,
+                &NO_BOXES,
+                &wide,
+                &mut out,
+            ),
+            (_, Some(b)) => {
+                self.scan_region::<true, false>(&self.active, &tear2, &mut hits, general, &b, &wide, &mut out)
+            }
         };
         let (outside, drift) = (out.outside, out.drift);
         self.scan_spare = spare;
@@ -948,8 +958,9 @@ impl Tissue {
         self.region_scan.filter(|s| s.key == (self.body.motion(), self.body.revision()))
     }
 
-    /// The tear check's scan of the disturbed region: each intact link with an end there, from its
-    /// `a` end, in the region's order; links past their material's tear ratio go to `hits` (in the
+    /// The tear check's scan of `region` (the disturbed region, or part of it): each intact link with
+    /// an end there, from its `a` end (from both with `BOTH_ENDS`, so that a link with both ends there
+    /// is met twice), in the region's order; links past their material's tear ratio go to `hits` (in the
     /// order met). Returns the largest squared stretch of the layers' links. `world` maps lattice
     /// coordinates to the world. With `BOXES`, `out` is set where a link with an end the step moved
     /// lies more than the tolerance outside its box (lattice coordinates): what the limits' repair
@@ -958,8 +969,9 @@ impl Tissue {
     /// elements and neighbours.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn scan_region<const BOXES: bool>(
+    fn scan_region<const BOXES: bool, const BOTH_ENDS: bool>(
         &self,
+        region: &[ElementId],
         tear2: &[f32],
         hits: &mut Vec<LinkId>,
         world: impl Fn([f32; 3]) -> Vec3,
@@ -977,7 +989,7 @@ impl Tissue {
         let (rest_pos, last_move) = (lat.rest_positions(), &self.last_move[..]);
         let moving = |i: usize| last_move.get(i).is_some_and(|&m| m > settle::SETTLED);
         let mut max_stretch2 = 0.0f32;
-        for &id in &self.active {
+        for &id in region {
             let e = id.index();
             let (Some(&s0), Some(&s1), Some(&p)) = (adj_start.get(e), adj_start.get(e + 1), pos.get(e))
             else {
@@ -995,10 +1007,10 @@ impl Tissue {
                 if BOXES && !keep {
                     keep = moving(adj_nbr[s] as usize);
                 }
-                if raw & crate::chainmail::SIDE_B_BIT != 0 {
+                if !BOTH_ENDS && raw & crate::chainmail::SIDE_B_BIT != 0 {
                     continue; // each link is checked from its `a` end only
                 }
-                let l = raw as usize;
+                let l = (raw & !crate::chainmail::SIDE_B_BIT) as usize;
                 if state[l] != crate::chainmail::INTACT {
                     continue;
                 }
@@ -1017,7 +1029,7 @@ impl Tissue {
                 // The force proxy is the layers' stretch: fibres are meant to stretch before they are cut.
                 let layer = matches!(kind[l], LinkKind::Layer(_));
                 let ratio2 = tear2.get(material[l].index()).copied().unwrap_or(f32::INFINITY);
-                tear_test(d2, rest2, ratio2, layer, &mut max_stretch2, || hits.push(LinkId(raw)));
+                tear_test(d2, rest2, ratio2, layer, &mut max_stretch2, || hits.push(LinkId(l as u32)));
             }
             if keep && let Some(k) = out.keep.as_deref_mut() {
                 k.push(id);
@@ -1043,7 +1055,15 @@ impl Tissue {
         let (mut plain_hits, mut plain_keep) = (Vec::new(), Vec::new());
         let mut plain =
             ScanFound { keep: out.keep.is_some().then_some(&mut plain_keep), ..Default::default() };
-        let m = self.scan_region::<BOXES>(tear2, &mut plain_hits, world, boxes, wide, &mut plain);
+        let m = self.scan_region::<BOXES, false>(
+            &self.active,
+            tear2,
+            &mut plain_hits,
+            world,
+            boxes,
+            wide,
+            &mut plain,
+        );
         let (outside, drift) = (plain.outside, plain.drift);
         debug_assert_eq!(m.to_bits(), max2.to_bits(), "the tear scans' largest stretch differs");
         debug_assert_eq!(plain_hits, hits, "the tear scans' tears differ");

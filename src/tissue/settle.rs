@@ -4,8 +4,8 @@
 //! the elements that still move (more than [`SETTLED`]) and their neighbours, so it shrinks again as
 //! the tissue settles, and relaxation, contact and the tear check cost what is still moving.
 
-use super::{LinkKind, RegionScan, Tissue, scan};
-use crate::chainmail::{ElementId, INTACT, LinkId, RelaxBudget, RelaxReport, SIDE_B_BIT};
+use super::{RegionScan, Tissue, scan};
+use crate::chainmail::{ElementId, LinkId, RelaxBudget, RelaxReport};
 
 /// An element that moved less than this in its last relaxation sweep (metres, lattice units) has
 /// settled: a tenth of a micrometre, far below what a trainee can see or an instrument feel.
@@ -389,19 +389,11 @@ impl Tissue {
     /// not such a step. (Every step of a settling scanned the whole released tent until 2026-11-29:
     /// 250 us a step at 256 x 192, 620 at 512 x 384.)
     pub(crate) fn scan_sweep_window(&mut self) -> bool {
-        if self.sweep_window().is_none() {
-            return false;
-        }
         let mut tear2 = std::mem::take(&mut self.tear_scratch);
-        scan::tear_ratios2_into(&self.body, &mut tear2);
         let mut hits = std::mem::take(&mut self.tear_hits);
-        hits.clear();
         let found = self.sweep_window().map(|window| {
-            let lat = self.body.lattice();
-            let (adj_start, adj_link, adj_nbr) = (&lat.adj_start[..], &lat.adj_link[..], &lat.adj_nbr[..]);
-            let (pos, state, material) =
-                (&self.body.pos[..], &self.body.link_state[..], &self.body.link_material[..]);
-            let (rest_len, kind, rest_pos) = (&self.rest_len[..], &self.link_kind[..], lat.rest_positions());
+            scan::tear_ratios2_into(&self.body, &mut tear2);
+            hits.clear();
             let geometry = self.geometry;
             // (A flat surface's world is its lattice with the axes permuted, to the bit.)
             let flat = matches!(geometry, super::Geometry::Surface(s) if s.is_flat());
@@ -412,34 +404,25 @@ impl Tissue {
                     geometry.to_world(p)
                 })
             };
-            let (mut max2, mut drift) = (0.0f32, 0.0f32);
-            for &id in window.iter().flat_map(|w| w.iter()) {
-                let e = id.index();
-                let (Some(&s0), Some(&s1), Some(&p), Some(r)) =
-                    (adj_start.get(e), adj_start.get(e + 1), pos.get(e), rest_pos.get(e))
-                else {
-                    continue;
-                };
-                drift = drift.max((p[0] - r[0]).abs().max((p[1] - r[1]).abs()));
-                let pa = world(p);
-                let slots = s0 as usize..s1 as usize;
-                let (links, nbrs) =
-                    (adj_link.get(slots.clone()).unwrap_or_default(), adj_nbr.get(slots).unwrap_or_default());
-                for (&raw, &y) in links.iter().zip(nbrs) {
-                    let l = (raw & !SIDE_B_BIT) as usize;
-                    if state.get(l) != Some(&INTACT) {
-                        continue;
-                    }
-                    let Some(&q) = pos.get(y as usize) else { continue };
-                    let rest = rest_len[l].max(f32::MIN_POSITIVE);
-                    let layer = matches!(kind[l], LinkKind::Layer(_));
-                    let ratio2 = tear2.get(material[l].index()).copied().unwrap_or(f32::INFINITY);
-                    let d2 = world(q).distance_squared(pa);
-                    super::tear_test(d2, rest * rest, ratio2, layer, &mut max2, || {
-                        hits.push(LinkId(l as u32))
-                    });
-                }
+            let mut out = super::ScanFound::default();
+            let mut max2 = 0.0f32;
+            for part in window {
+                let m = self.scan_region::<false, true>(
+                    part,
+                    &tear2,
+                    &mut hits,
+                    world,
+                    &super::NO_BOXES,
+                    &[],
+                    &mut out,
+                );
+                max2 = max2.max(m);
             }
+            let (pos, rest) = (self.body.positions(), self.body.lattice().rest_positions());
+            let drift = window.iter().flat_map(|w| w.iter()).fold(0.0f32, |d, e| {
+                let (p, r) = (pos[e.index()], rest[e.index()]);
+                d.max((p[0] - r[0]).abs().max((p[1] - r[1]).abs()))
+            });
             (max2, drift)
         });
         let done = found.is_some();
@@ -466,7 +449,15 @@ impl Tissue {
         let geometry = self.geometry;
         let world = |p| glam::Vec3::from(geometry.to_world(p));
         let (mut full, mut out) = (Vec::new(), super::ScanFound::default());
-        let m = self.scan_region::<false>(tear2, &mut full, world, &super::NO_BOXES, &[], &mut out);
+        let m = self.scan_region::<false, false>(
+            &self.active,
+            tear2,
+            &mut full,
+            world,
+            &super::NO_BOXES,
+            &[],
+            &mut out,
+        );
         for l in &full {
             debug_assert!(
                 hits.binary_search_by_key(&l.0, |h| h.0).is_ok(),
