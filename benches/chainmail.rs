@@ -1,10 +1,16 @@
-//! ChainMail engine benches: the chain reaction (rigid: every element moves; soft: a local drag) and
-//! one relaxation sweep. Figures go to the README's performance table as ns per element.
+//! ChainMail engine benches: the chain reaction (rigid: every element moves; soft: a local drag), one
+//! relaxation sweep, and a lift's cone (the distances from the held elements, `docs/implicit-lift.md`)
+//! over the careful meninges exercise's final lift. Figures go to the README's performance table as ns
+//! per element.
 
 use std::time::Duration;
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
-use dissect::chainmail::{Body, ElementId, Lattice, Material, Pass, RelaxBudget, RelaxRegion, Workspace};
+use dissect::chainmail::{
+    Body, Cone, ElementId, Lattice, Material, Pass, RelaxBudget, RelaxRegion, Workspace,
+};
+use dissect::runner::Player;
+use dissect::scene::{Scene, Script, Tissue as SceneTissue};
 
 /// A small deterministic generator, so the benches' inputs are seeded.
 struct Lcg(u64);
@@ -107,5 +113,46 @@ fn benches(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(chainmail, benches);
+/// The meninges' body and the elements the forceps hold at step `at` of the careful script, at `nu × nv`.
+fn held_at(nu: u32, nv: u32, at: u64) -> (Body, Vec<ElementId>) {
+    let mut scene = Scene::from_str(include_str!("../scenes/meninges.ron"), "meninges.ron").expect("scene");
+    if let SceneTissue::Layers(l) = &mut scene.tissue {
+        l.resolution = [nu, nv];
+    }
+    let script =
+        Script::from_str(include_str!("../scenes/scripts/meninges_careful.ron"), "careful").expect("script");
+    let mut world = scene.build_world(false).expect("world");
+    let mut player = Player::new(script.0);
+    while world.step_count() < at {
+        player.feed(&mut world);
+        world.step();
+    }
+    let tissue = world.tissue();
+    (tissue.body().clone(), tissue.held().collect())
+}
+
+/// A lift's cone from the held elements at the careful exercise's final lift (step 1 290), grown
+/// as far as a 5 mm lift reaches: what a lift kept as a distance field would settle over a lift
+/// (the tent under the jaws), element by element in order of distance.
+fn cone(c: &mut Criterion) {
+    let mut group = c.benchmark_group("chainmail/cone");
+    group.measurement_time(Duration::from_secs(4));
+    for (nu, nv) in [(256, 192), (512, 384)] {
+        let (body, held) = held_at(nu, nv, 1_290);
+        let mut cone = Cone::new();
+        cone.start(&body, &held);
+        let settled = cone.grow(&body, 0.005);
+        group.throughput(Throughput::Elements(settled as u64));
+        group.bench_function(format!("meninges_lift_{nu}x{nv}"), |b| {
+            b.iter(|| {
+                cone.start(&body, &held);
+                cone.grow(&body, 0.005)
+            })
+        });
+        println!("chainmail/cone/meninges_lift_{nu}x{nv}: {} held, {settled} elements settled", held.len());
+    }
+    group.finish();
+}
+
+criterion_group!(chainmail, benches, cone);
 criterion_main!(chainmail);

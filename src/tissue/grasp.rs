@@ -299,33 +299,14 @@ mod tests {
     /// 3 % of the rises above it, by the raise's overshoot. `docs/implicit-lift.md` builds on both.
     #[test]
     fn a_lift_is_a_distance_field_from_the_held_elements() {
-        use crate::chainmail::{Body, ElementId};
-        use std::cmp::Reverse;
-        use std::collections::BinaryHeap;
+        use crate::chainmail::{Body, Cone, ElementId};
 
         fn distances(body: &Body, seeds: &[usize]) -> Vec<f32> {
-            let mut d = vec![f32::INFINITY; body.pos.len()];
-            let mut heap = BinaryHeap::new();
-            for &s in seeds {
-                d[s] = 0.0;
-                heap.push(Reverse((0u32, s)));
-            }
-            while let Some(Reverse((key, u))) = heap.pop() {
-                let du = f32::from_bits(key);
-                if du > d[u] {
-                    continue;
-                }
-                let slots = (u * body.width..(u + 1) * body.width)
-                    .map(|k| (body.slot_nbr[k], body.classes[body.slot_class[k] as usize].bounds[1][2]));
-                for (y, hi) in slots.chain(body.pairs.row(u).map(|(y, [_, hi])| (y, hi))) {
-                    let (y, nd) = (y as usize, du + hi.max(0.0));
-                    if y != u && hi.is_finite() && nd < d[y] {
-                        d[y] = nd;
-                        heap.push(Reverse((nd.to_bits(), y)));
-                    }
-                }
-            }
-            d
+            let seeds: Vec<ElementId> = seeds.iter().map(|&s| ElementId(s as u32)).collect();
+            let mut cone = Cone::new();
+            cone.start(body, &seeds);
+            cone.grow(body, f32::INFINITY);
+            (0..body.pos.len()).map(|e| cone.distance(ElementId(e as u32)).unwrap_or(f32::INFINITY)).collect()
         }
 
         let (mut world, mut player) = careful([96, 72], false);

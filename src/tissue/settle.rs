@@ -5,7 +5,9 @@
 //! the tissue settles, and relaxation, contact and the tear check cost what is still moving.
 
 use super::{RegionScan, Tissue, scan};
-use crate::chainmail::{ElementId, LinkId, RelaxBudget, RelaxReport};
+#[cfg(debug_assertions)]
+use crate::chainmail::LinkId;
+use crate::chainmail::{ElementId, RelaxBudget, RelaxReport};
 
 /// An element that moved less than this in its last relaxation sweep (metres, lattice units) has
 /// settled: a tenth of a micrometre, far below what a trainee can see or an instrument feel.
