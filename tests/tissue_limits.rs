@@ -68,38 +68,74 @@ fn worst_violation(world: &World) -> (f32, u32) {
     worst
 }
 
+/// Plays `acts` (each a move there in that many steps, or a command held for that many steps) on the
+/// meninges at 40 × 30 and checks every intact link after every step.
+fn play(acts: &[(Act, u8)]) -> Result<(), String> {
+    let mut world = world(40, 30);
+    let spacing = world.tissue().spacing();
+    // Moves go there in small steps, as a hand does.
+    let mut at = world.tissue().surface_point(0.5, 0.5, 0.003);
+    for (a, steps) in acts {
+        match a {
+            Act::Do(c) => world.push(c.clone()),
+            Act::To(..) => {}
+        }
+        let goal = match *a {
+            Act::To(u, v, h) => world.tissue().surface_point(u, v, h),
+            Act::Do(_) => at,
+        };
+        let from = at;
+        for s in 1..=u32::from(*steps) {
+            let f = s as f32 / f32::from(*steps);
+            at = [0, 1, 2].map(|k| from[k] + f * (goal[k] - from[k]));
+            world.push(Command::MoveTo(at));
+            world.step();
+            let (v, l) = worst_violation(&world);
+            if v > SLACK * spacing {
+                return Err(format!(
+                    "step {}: link {} ({:?}) is {} m outside its limits ({} spacings): offset {:?}, box {:?}, counters {:?}",
+                    world.step_count(),
+                    l,
+                    world.tissue().link_kind(LinkId(l)),
+                    v,
+                    v / spacing,
+                    world.tissue().body().link_offset(LinkId(l)),
+                    world.tissue().body().link_limits(LinkId(l)),
+                    world.last_step()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(common::cases(12)))]
     #[test]
     fn no_intact_link_leaves_its_limits(acts in proptest::collection::vec((act(), 1u8..30), 1..30)) {
-        let mut world = world(40, 30);
-        let spacing = world.tissue().spacing();
-        // Moves go there in small steps, as a hand does.
-        let mut at = world.tissue().surface_point(0.5, 0.5, 0.003);
-        for (a, steps) in &acts {
-            match a {
-                Act::Do(c) => world.push(c.clone()),
-                Act::To(..) => {}
-            }
-            let goal = match *a {
-                Act::To(u, v, h) => world.tissue().surface_point(u, v, h),
-                Act::Do(_) => at,
-            };
-            let from = at;
-            for s in 1..=u32::from(*steps) {
-                let f = s as f32 / f32::from(*steps);
-                at = [0, 1, 2].map(|k| from[k] + f * (goal[k] - from[k]));
-                world.push(Command::MoveTo(at));
-                world.step();
-                let (v, l) = worst_violation(&world);
-                prop_assert!(
-                    v <= SLACK * spacing,
-                    "step {}: link {} ({:?}) is {} m outside its limits ({} spacings): offset {:?}, box {:?}, counters {:?}",
-                    world.step_count(), l, world.tissue().link_kind(LinkId(l)), v, v / spacing,
-                    world.tissue().body().link_offset(LinkId(l)), world.tissue().body().link_limits(LinkId(l)),
-                    world.last_step()
-                );
-            }
-        }
+        let played = play(&acts);
+        prop_assert!(played.is_ok(), "{}", played.err().unwrap_or_default());
+    }
+}
+
+/// A known failure (found by `.ci/run`'s random sessions on 2026-11-29, and failing since the settling
+/// of released tissue came in, a36e639; 1b1c4e8 before it passes): the forceps drag a grasp 2 mm up and
+/// across, the probe is selected (which lets go) and lifted clear, and while the released tissue settles
+/// the limits' repair reaches its bound on moves (8 881; 35 521 with a bound four times higher) with
+/// a dura link 0.64 spacings outside its box, the step that tears one link. Ignored until fixed:
+/// `cargo test --test tissue_limits -- --ignored`.
+#[test]
+#[ignore = "known failure: the limits' repair runs out of moves while a released drag settles"]
+fn a_released_drag_settles_within_its_limits() {
+    use dissect::simulation::InstrumentKind::Probe;
+    let acts = [
+        (Act::To(0.7771646, 0.6480908, 0.0), 1),
+        (Act::Do(Command::Grasp), 1),
+        (Act::To(0.4648598, 0.8565077, 0.0018575288), 13),
+        (Act::Do(Command::Select(Probe)), 11),
+        (Act::To(0.39631665, 0.63910294, 0.014901154), 11),
+    ];
+    if let Err(e) = play(&acts) {
+        panic!("{e}");
     }
 }
