@@ -47,9 +47,15 @@ impl Tissue {
         // The step's chain reactions have done part of its work already.
         let updates = REGION_UPDATES.saturating_sub(self.step_moved).max(REGION_UPDATES_LEAST);
         // Settling tissue shares the updates with the coarse correction (once the release's fill has
-        // found the whole of what settles).
-        let updates = if self.settling && !self.filling() { updates / 2 } else { updates };
-        if self.settling && self.coarse.placing() {
+        // found the whole of what settles). Not while the forceps clamp part of the tissue (the probe
+        // used beside a grasp, two-handed): the correction's places take no account of what the clamp
+        // holds, and beside it they put links out of their boxes that the limits' repair, bouncing
+        // against the clamp, cannot bring back (`tests/tissue_limits.rs`,
+        // `a_clamped_drag_keeps_its_limits_while_the_probe_is_used`). The sweeps, which keep every
+        // link within its box, bring such tissue back alone.
+        let correcting = self.settling && self.jaws.held.is_empty();
+        let updates = if correcting && !self.filling() { updates / 2 } else { updates };
+        if correcting && self.coarse.placing() {
             // The correction is placing the region's elements: sweeps now would be undone when the
             // places are written, so the step's updates are the correction's.
             let mut report = RelaxReport { converged: false, ..RelaxReport::default() };
@@ -91,8 +97,14 @@ impl Tissue {
         if partial {
             report.converged = false;
         }
-        if self.settling && !self.filling() {
+        if correcting && !self.filling() {
             self.settle_work(updates, &mut report);
+        } else if self.settling && !self.filling() {
+            // (Clamped: the settling still ends after its most steps.)
+            self.settle_steps += 1;
+            if self.settle_steps >= SETTLE_STEPS {
+                self.settling = false;
+            }
         }
         report
     }
