@@ -4,8 +4,10 @@
 //!
 //! Along the normal every bound a body keeps is a difference constraint on two heights: a link slot's
 //! box bounds `z[owner] - z[nbr]` by `hi`, so `z[nbr] >= z[owner] - hi`, and a normal pair's the same
-//! way. Read each as an edge from the owner to the neighbour weighing `hi` (a negative `hi` is taken
-//! as zero: the distance is then an upper bound of the true one, and the cone below still a bound).
+//! way. Read each as an edge from the owner to the neighbour weighing `hi` ([`Cone::start`] takes a
+//! negative `hi` as zero: the distance is then an upper bound of the true one, and the cone below
+//! still a bound; the lift's cone, [`ConeLift`], takes every weight as it is, each edge reweighted by
+//! the rest heights so that none is negative: a fibre's bound keeps the upper layer above the lower).
 //! With `D[j]` the least distance from the seeds to `j` over these edges, every state whose bounds
 //! hold has `z[j] >= A - D[j]` (`A` the seeds' common height), and a lift of the seeds to `A'` is
 //! `max(z_before, A' - D)`: the test `tissue::grasp::tests::a_lift_is_a_distance_field_from_the_held_elements`
@@ -18,14 +20,19 @@
 //! cone of a body, starting and growing one allocates nothing. [`distances_plain`] is the reference it
 //! is compared with: label-correcting sweeps over every element until nothing changes.
 //!
+//! [`ConeLift`] is the lift itself (`Body::lift_by_cone`, which the forceps' jaws take along the
+//! normal): the chain reaction's heights without its lists, its completion or its search (a test
+//! compares the two, `tissue::grasp::tests::the_cone_s_lift_is_the_chain_reaction_s`).
+//!
 //! The distances are found over the body's own rows (slots and pairs), not a grid: the same cone
 //! serves any topology the body has.
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-use super::body::Body;
+use super::body::{Body, FIXED, HELD, PINNED};
 use super::ids::ElementId;
+use super::workspace::Workspace;
 
 /// The least distances over a body's bounds along the third coordinate from a set of seeds, settled
 /// in order of distance as far as [`Cone::grow`] is asked to go.
@@ -43,6 +50,9 @@ pub struct Cone {
     class_hi: Vec<f32>,
     /// Every element within this distance is settled.
     radius: f32,
+    /// The distances are taken relative to the rest heights (see [`Cone::start_at`]): every edge's
+    /// weight, negative ones too, is exact.
+    rest: bool,
 }
 
 /// An edge's weight from a bound's `hi`: not below zero; `None` for a slot that bounds nothing (a
@@ -67,6 +77,17 @@ impl Cone {
     /// Starts a cone from `seeds` (at distance zero; indices outside the body are skipped), forgetting
     /// the last one. Nothing is settled until [`Cone::grow`].
     pub fn start(&mut self, body: &Body, seeds: &[ElementId]) {
+        self.start_at(body, seeds.iter().map(|s| (s.0, 0.0)), false);
+    }
+
+    /// [`Cone::start`] with each seed at its own distance (not below zero). With `rest`, each edge
+    /// `u -> y` of weight `hi` (negative ones as they are: an element whose bound keeps it above its
+    /// neighbour) weighs `hi - r[u] + r[y]`, `r` the rest heights (Johnson's reweighting: the rest
+    /// state meets every bound, so no weight is below zero and Dijkstra's order holds); the distance
+    /// found for `y` is then `D[y] + r[y]` less the seeds' offset, and its cone holds heights relative
+    /// to rest.
+    pub(crate) fn start_at(&mut self, body: &Body, seeds: impl Iterator<Item = (u32, f32)>, rest: bool) {
+        self.rest = rest;
         let n = body.pos.len();
         if self.dist.len() != n {
             self.dist.clear();
@@ -84,14 +105,16 @@ impl Cone {
         self.radius = f32::NEG_INFINITY;
         self.class_hi.clear();
         self.class_hi.extend(body.classes.iter().map(|c| c.bounds[1][2]));
-        for s in seeds {
-            let e = s.0;
+        for (e, d0) in seeds {
+            let d0 = d0.max(0.0);
             if let Some(d) = self.dist.get_mut(e as usize)
-                && *d > 0.0
+                && *d > d0
             {
-                *d = 0.0;
-                self.touched.push(e);
-                self.heap.push(Reverse(key(0.0, e)));
+                if d.is_infinite() {
+                    self.touched.push(e);
+                }
+                *d = d0;
+                self.heap.push(Reverse(key(d0, e)));
             }
         }
     }
@@ -102,6 +125,8 @@ impl Cone {
         let before = self.settled.len();
         let w = body.width;
         let (slot_nbr, slot_class, pairs) = (&body.slot_nbr[..], &body.slot_class[..], &body.pairs);
+        let rest_pos = body.lattice.rest_positions();
+        let rest = self.rest && rest_pos.len() == body.pos.len();
         let Self { dist, settled, touched, heap, class_hi, .. } = self;
         while let Some(&Reverse(k)) = heap.peek() {
             let (du, u) = (f32::from_bits((k >> 32) as u32), k as u32 as usize);
@@ -113,8 +138,19 @@ impl Cone {
                 continue; // a stale entry: `u` was reached closer since
             }
             settled.push(u as u32);
+            let ru = if rest { rest_pos[u][2] } else { 0.0 };
             let mut relax = |y: u32, hi: f32| {
-                let Some(wt) = weight(hi) else { return };
+                let wt = if rest {
+                    let Some(ry) = rest_pos.get(y as usize).map(|p| p[2]) else { return };
+                    if !hi.is_finite() {
+                        return;
+                    }
+                    // (At rest every bound holds: below zero only by rounding.)
+                    (hi - ru + ry).max(0.0)
+                } else {
+                    let Some(wt) = weight(hi) else { return };
+                    wt
+                };
                 let nd = du + wt;
                 if let Some(d) = dist.get_mut(y as usize)
                     && nd < *d
@@ -156,6 +192,240 @@ impl Cone {
         self.settled.iter().map(|&e| ElementId(e))
     }
 }
+
+/// Elements per bit of a lift's map of where its cone has settled elements.
+const BLOCK: usize = 256;
+
+/// A lift along the normal kept as a cone (`docs/implicit-lift.md`): while the same elements are held
+/// and nothing is cut, torn, pinned or given a new material, the distances `D` from them stay true, and
+/// a rise of the held elements to `A'` (the highest's height) leaves every element at
+/// `max(z, A' - D)`, the least heights that meet every bound along the normal and lie at or above
+/// the heights before. The cone grows by the ring the rise reaches (`Body::lift_by_cone`), each
+/// element settled once per grasp, not searched again from the jaws every step.
+#[derive(Clone, Debug, Default)]
+pub struct ConeLift {
+    cone: Cone,
+    /// The seeds and their heights' offsets from the first (bits), as the cone was started from,
+    /// and the body's revision and shape then.
+    seeds: Vec<u32>,
+    offs: Vec<u32>,
+    key: Option<(u64, u64)>,
+    /// The seeds in order (to tell a seed from another fixed element).
+    sorted: Vec<u32>,
+    /// How many settled elements have been looked at for fixed ones, and the fixed ones found.
+    scanned: usize,
+    fixed: Vec<u32>,
+    /// A bit per block of [`BLOCK`] elements with a settled element.
+    blocks: Vec<u64>,
+    /// How many lifts the cone made (for tests).
+    pub(crate) lifts: u64,
+    /// The lowest rest height of a seed (the cone's distances are relative to it).
+    base: f32,
+}
+
+impl ConeLift {
+    /// No cone yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Forgets the cone: the next lift starts one.
+    pub fn clear(&mut self) {
+        self.key = None;
+    }
+
+    /// How many lifts the cone made.
+    pub fn lifts(&self) -> u64 {
+        self.lifts
+    }
+
+    /// Starts the cone again if the seeds, their offsets or the body changed since it was started.
+    fn fit(&mut self, body: &Body, seeds: &[u32], offs: &[f32], top: f32) {
+        let key = (body.revision, body.shape);
+        let same = self.key == Some(key)
+            && self.seeds == seeds
+            && self.offs.len() == offs.len()
+            && self.offs.iter().zip(offs).all(|(a, b)| *a == b.to_bits());
+        if same {
+            return;
+        }
+        self.key = Some(key);
+        self.seeds.clear();
+        self.seeds.extend_from_slice(seeds);
+        self.offs.clear();
+        self.offs.extend(offs.iter().map(|o| o.to_bits()));
+        self.sorted.clear();
+        self.sorted.extend_from_slice(seeds);
+        self.sorted.sort_unstable();
+        self.scanned = 0;
+        self.fixed.clear();
+        self.blocks.clear();
+        self.blocks.resize(body.pos.len().div_ceil(BLOCK).div_ceil(64), 0);
+        // Heights relative to rest: a seed's distance is its depth under the highest plus its rest
+        // height over the lowest seed's.
+        let rest = body.lattice.rest_positions();
+        let r = |s: u32| rest.get(s as usize).map_or(0.0, |p| p[2]);
+        self.base = seeds.iter().fold(f32::INFINITY, |m, &s| m.min(r(s)));
+        let base = self.base;
+        self.cone.start_at(body, seeds.iter().zip(offs).map(|(&s, &o)| (s, top - o + r(s) - base)), true);
+    }
+
+    /// The height the cone gives element `j` when the highest seed is at `a`: `a - D[j]`.
+    #[inline(always)]
+    fn height(&self, rest: &[[f32; 3]], a: f32, j: usize) -> f32 {
+        (a - self.base) - self.cone.dist[j] + rest[j][2]
+    }
+
+    /// The largest distance of an element reached and not settled that a rise of the highest seed to
+    /// `a1` would lift (`None`: none would, and none beyond them either; see [`Body::lift_by_cone`]).
+    fn reach(&self, pos: &[[f32; 3]], rest: &[[f32; 3]], a1: f32) -> Option<f32> {
+        let mut reach: Option<f32> = None;
+        for &Reverse(k) in self.cone.heap.iter() {
+            let (du, u) = (f32::from_bits((k >> 32) as u32), k as u32 as usize);
+            let (Some(&d), Some(p)) = (self.cone.dist.get(u), pos.get(u)) else { continue };
+            if d != du || du <= self.cone.radius || u >= rest.len() {
+                continue; // stale, or settled
+            }
+            if self.height(rest, a1, u) > p[2] {
+                reach = Some(reach.map_or(du, |r: f32| r.max(du)));
+            }
+        }
+        reach
+    }
+
+    /// Looks at the elements settled since the last call: fixed ones (not seeds) are kept, and their
+    /// blocks marked.
+    fn scan(&mut self, flags: &[u8]) {
+        for &e in &self.cone.settled[self.scanned..] {
+            let i = e as usize;
+            if let Some(w) = self.blocks.get_mut(i / BLOCK / 64) {
+                *w |= 1 << ((i / BLOCK) % 64);
+            }
+            if flags.get(i).is_some_and(|f| f & FIXED != 0) && self.sorted.binary_search(&e).is_err() {
+                self.fixed.push(e);
+            }
+        }
+        self.scanned = self.cone.settled.len();
+    }
+}
+
+impl Body {
+    /// The normal pass of a lift by the cone: `seeds` (the held elements, the first the one the
+    /// others hang from by `offs`, their heights' offsets from it) rise together so that the first
+    /// reaches `goal`, or as far toward it as the pinned (or otherwise fixed) elements the cone
+    /// reaches allow, and every other element goes to `max(z, A' - D)`. Returns the elements moved
+    /// (the seeds and the elements that rose by other than the seeds' rise, the tent's foot, in the
+    /// workspace's moved list; those that rose with the seeds, straining nothing, counted as
+    /// [`Workspace::raised_unlisted`]) and the share of the rise allowed. `None`, with nothing moved,
+    /// where the cone does not apply: the seeds do not hang from the first by their offsets, the
+    /// move is not a rise, or a seed is not held (the chain reaction then moves the tissue).
+    ///
+    /// Every element the cone has settled is looked at, in blocks of [`BLOCK`] in memory order: the
+    /// taut inside of a tent is written every step, as the chain reaction's raise wrote it, but the
+    /// completion's walk over its foot and rim (`reaction/complete.rs`) is the cone's ring.
+    ///
+    /// Only elements the cone has settled can rise: an element reached and not settled that would not
+    /// rise bounds every element behind it, by the bounds along its shortest path, which hold.
+    pub(crate) fn lift_by_cone(
+        &mut self,
+        ws: &mut Workspace,
+        lift: &mut ConeLift,
+        seeds: &[u32],
+        offs: &[f32],
+        goal: f32,
+    ) -> Option<(u32, f32)> {
+        let n = self.pos.len();
+        let &first = seeds.first()?;
+        let c = self.pos.get(first as usize)?[2];
+        let dz = goal - c;
+        if seeds.len() != offs.len() || !(dz > 0.0 && dz.is_finite()) {
+            return None;
+        }
+        for (&s, &o) in seeds.iter().zip(offs) {
+            let (Some(p), Some(&f)) = (self.pos.get(s as usize), self.flags.get(s as usize)) else {
+                return None;
+            };
+            if f & PINNED != 0 || f & HELD == 0 || (p[2] - (c + o)).abs() > HANG {
+                return None;
+            }
+        }
+        let top = offs.iter().fold(f32::NEG_INFINITY, |m, &o| m.max(o));
+        let a1 = goal + top;
+        lift.fit(self, seeds, offs, top);
+        let rest = &self.lattice.rest_positions()[..n];
+        while let Some(r) = lift.reach(&self.pos, rest, a1) {
+            lift.cone.grow(self, r + dz);
+        }
+        lift.scan(&self.flags);
+        // The pinned (or otherwise held) elements the rise reaches stop it where the first of them
+        // would have to move: at its height plus its distance.
+        // (Read off the fixed elements and the distances alone, not the goal: a blocked pull stays
+        // blocked however far it asks, as `tissue::grasp::BlockedPull` assumes.)
+        let stop = lift.fixed.iter().fold(f32::INFINITY, |m, &p| {
+            let p = p as usize;
+            m.min(self.pos[p][2] - lift.height(rest, 0.0, p))
+        });
+        let a0 = c + top;
+        let (a1, fraction) = if stop < a1 {
+            // As the chain reaction's search: a move shorter than its tolerance is none.
+            if stop - a0 <= super::reaction::BISECT_TOLERANCE {
+                return Some((0, 0.0));
+            }
+            (stop, (stop - a0) / (a1 - a0))
+        } else {
+            (a1, 1.0)
+        };
+        let goal = a1 - top;
+        let dz = goal - c;
+        ws.fit(self);
+        ws.next_generation();
+        ws.lift.forget();
+        let g = ws.generation;
+        for (&s, &o) in seeds.iter().zip(offs) {
+            let s = s as usize;
+            ws.stamp[s] = g;
+            ws.old[s] = self.pos[s];
+            ws.sponsor[s] = s as u32;
+            ws.moved.push(s as u32);
+            self.pos[s][2] = goal + o;
+        }
+        // What rose by the seeds' rise (within a thousandth of it, as the chain reaction's raise
+        // takes it) rose as a body.
+        let slack = 1e-3 * dz;
+        let (pos, flags) = (&mut self.pos[..n], &self.flags[..n]);
+        let mut rigid = 0usize;
+        for (w, &bits) in lift.blocks.iter().enumerate() {
+            let mut x = bits;
+            while x != 0 {
+                let b = w * 64 + x.trailing_zeros() as usize;
+                x &= x - 1;
+                let range = b * BLOCK..((b + 1) * BLOCK).min(n);
+                for j in range {
+                    let (new, z) = (lift.height(rest, a1, j), pos[j][2]);
+                    if new > z && flags[j] & FIXED == 0 {
+                        if (new - z - dz).abs() > slack {
+                            ws.stamp[j] = g;
+                            ws.old[j] = pos[j];
+                            ws.sponsor[j] = j as u32;
+                            ws.moved.push(j as u32);
+                        } else {
+                            rigid += 1;
+                        }
+                        pos[j][2] = new;
+                    }
+                }
+            }
+        }
+        ws.lift.unlisted_count = rigid;
+        lift.lifts += 1;
+        self.note_motion();
+        Some(((ws.moved.len() + rigid) as u32, fraction))
+    }
+}
+
+/// How far a seed may lie from where its offset hangs it, and a fixed element under the cone, in the
+/// lattice's units (metres): a few rounding errors of a height.
+const HANG: f32 = 1e-9;
 
 /// The reference for [`Cone`]: each element's least distance from `seeds` over the same edges, found
 /// by sweeping every element's edges until no distance falls (infinite where unreachable).

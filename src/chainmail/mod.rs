@@ -43,7 +43,7 @@
 //! | `stencil` | what the fast paths know of a grid body: neighbour offsets, regular elements, row boxes |
 //! | `workspace` | the loops' scratch, the stencil of the body it serves, the SIMD level |
 //! | `reaction/` | the chain reaction: API and one-by-one loop (`mod`), shared arrays and checks (`arrays`), runs across rows (`runs`) in portable (`chunk`) or AVX-512 (`avx512`) chunks |
-//! | `cone` | a lift's cone: the least distances along the normal from held elements over the bounds (`docs/implicit-lift.md`) |
+//! | `cone` | a lift's cone: the least distances along the normal from held elements over the bounds, and the lift of the forceps' jaws by it (`docs/implicit-lift.md`) |
 //! | `relax/` | relaxation: API and generic sweeps (`mod`), the plain kernel (`kernel`), the grid SIMD kernel (`grid`), the split into bands (`bands`) |
 
 mod body;
@@ -63,7 +63,7 @@ mod workspace;
 
 pub(crate) use body::INTACT;
 pub use body::{Body, BreakReason};
-pub use cone::{Cone, distances_plain};
+pub use cone::{Cone, ConeLift, distances_plain};
 pub use error::ChainMailError;
 pub use ids::{ElementId, LinkId, MaterialId};
 pub(crate) use lattice::SIDE_B as SIDE_B_BIT;

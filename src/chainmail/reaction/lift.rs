@@ -271,6 +271,15 @@ impl Lift {
         }
     }
 
+    /// Forgets what the last reactions raised: a lift made otherwise since (`chainmail::ConeLift`)
+    /// left the tent where the memory no longer says.
+    pub(crate) fn forget(&mut self) {
+        for m in &mut self.memos {
+            m.whole = false;
+            m.rise = 0.0;
+        }
+    }
+
     /// Sizes the per-element scratch for `body` (when a workspace is fitted, not at the first raise).
     pub(crate) fn fit(&mut self, body: &Body) {
         let n = body.pos.len();

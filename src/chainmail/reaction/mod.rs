@@ -53,7 +53,7 @@ const BISECT_STEPS: u32 = 20;
 
 /// A bisection stops once the source's move is known to within this (lattice units: metres on
 /// tissue; a tenth of a micrometre, far below what a trainee sees or an instrument feels).
-const BISECT_TOLERANCE: f32 = 1e-7;
+pub(crate) const BISECT_TOLERANCE: f32 = 1e-7;
 
 /// Most estimates tried from a blocked reaction's measured excess before bisecting.
 const ESTIMATES: u32 = 3;
