@@ -53,6 +53,9 @@ pub struct Cone {
     /// The distances are taken relative to the rest heights (see [`Cone::start_at`]): every edge's
     /// weight, negative ones too, is exact.
     rest: bool,
+    /// The elements reached (pushed on the heap) since the list was last emptied, by
+    /// `ConeLift::reach`, which looks again only at these after a growth.
+    pushed: Vec<u32>,
 }
 
 /// An edge's weight from a bound's `hi`: not below zero; `None` for a slot that bounds nothing (a
@@ -102,6 +105,7 @@ impl Cone {
         self.touched.clear();
         self.settled.clear();
         self.heap.clear();
+        self.pushed.clear();
         self.radius = f32::NEG_INFINITY;
         self.class_hi.clear();
         self.class_hi.extend(body.classes.iter().map(|c| c.bounds[1][2]));
@@ -127,7 +131,7 @@ impl Cone {
         let (slot_nbr, slot_class, pairs) = (&body.slot_nbr[..], &body.slot_class[..], &body.pairs);
         let rest_pos = body.lattice.rest_positions();
         let rest = self.rest && rest_pos.len() == body.pos.len();
-        let Self { dist, settled, touched, heap, class_hi, .. } = self;
+        let Self { dist, settled, touched, heap, class_hi, pushed, .. } = self;
         while let Some(&Reverse(k)) = heap.peek() {
             let (du, u) = (f32::from_bits((k >> 32) as u32), k as u32 as usize);
             if du > radius {
@@ -160,6 +164,7 @@ impl Cone {
                     }
                     *d = nd;
                     heap.push(Reverse(key(nd, y)));
+                    pushed.push(y);
                 }
             };
             let slots = u * w..(u + 1) * w;
@@ -217,6 +222,11 @@ pub struct ConeLift {
     fixed: Vec<u32>,
     /// A bit per block of [`BLOCK`] elements with a settled element.
     blocks: Vec<u64>,
+    /// Per element, its height when the highest seed is at the lowest seed's rest height, less that
+    /// height (`rest - D`): infinitely low for an element not settled or fixed. The write of a lift
+    /// reads this and the heights alone (4 bytes an element beside the positions' 12, not the
+    /// distances', the rest positions' and the flags' 17).
+    lift_at: Vec<f32>,
     /// How many lifts the cone made (for tests).
     pub(crate) lifts: u64,
     /// The lowest rest height of a seed (the cone's distances are relative to it).
@@ -257,6 +267,18 @@ impl ConeLift {
         self.sorted.clear();
         self.sorted.extend_from_slice(seeds);
         self.sorted.sort_unstable();
+        // (What the last cone settled is forgotten first.)
+        let n = body.pos.len();
+        if self.lift_at.len() != n {
+            self.lift_at.clear();
+            self.lift_at.resize(n, f32::NEG_INFINITY);
+        } else {
+            for &e in &self.cone.settled {
+                if let Some(o) = self.lift_at.get_mut(e as usize) {
+                    *o = f32::NEG_INFINITY;
+                }
+            }
+        }
         self.scanned = 0;
         self.fixed.clear();
         self.blocks.clear();
@@ -278,31 +300,52 @@ impl ConeLift {
 
     /// The largest distance of an element reached and not settled that a rise of the highest seed to
     /// `a1` would lift (`None`: none would, and none beyond them either; see [`Body::lift_by_cone`]).
-    fn reach(&self, pos: &[[f32; 3]], rest: &[[f32; 3]], a1: f32) -> Option<f32> {
+    ///
+    /// With `all`, every element on the heap is looked at; otherwise only those reached since the last
+    /// call (the others were looked at then, for the same rise, and their heights have not changed).
+    fn reach(&mut self, pos: &[[f32; 3]], rest: &[[f32; 3]], a1: f32, all: bool) -> Option<f32> {
         let mut reach: Option<f32> = None;
-        for &Reverse(k) in self.cone.heap.iter() {
-            let (du, u) = (f32::from_bits((k >> 32) as u32), k as u32 as usize);
-            let (Some(&d), Some(p)) = (self.cone.dist.get(u), pos.get(u)) else { continue };
+        let mut look = |u: usize, du: f32| {
+            let (Some(&d), Some(p)) = (self.cone.dist.get(u), pos.get(u)) else { return };
             if d != du || du <= self.cone.radius || u >= rest.len() {
-                continue; // stale, or settled
+                return; // stale, or settled
             }
-            if self.height(rest, a1, u) > p[2] {
+            if (a1 - self.base) - du + rest[u][2] > p[2] {
                 reach = Some(reach.map_or(du, |r: f32| r.max(du)));
             }
+        };
+        if all {
+            for &Reverse(k) in self.cone.heap.iter() {
+                look(k as u32 as usize, f32::from_bits((k >> 32) as u32));
+            }
+        } else {
+            for &u in &self.cone.pushed {
+                let u = u as usize;
+                if let Some(&d) = self.cone.dist.get(u) {
+                    look(u, d);
+                }
+            }
         }
+        self.cone.pushed.clear();
         reach
     }
 
     /// Looks at the elements settled since the last call: fixed ones (not seeds) are kept, and their
     /// blocks marked.
-    fn scan(&mut self, flags: &[u8]) {
+    fn scan(&mut self, flags: &[u8], rest: &[[f32; 3]]) {
         for &e in &self.cone.settled[self.scanned..] {
             let i = e as usize;
             if let Some(w) = self.blocks.get_mut(i / BLOCK / 64) {
                 *w |= 1 << ((i / BLOCK) % 64);
             }
-            if flags.get(i).is_some_and(|f| f & FIXED != 0) && self.sorted.binary_search(&e).is_err() {
+            let fixed = flags.get(i).is_none_or(|f| f & FIXED != 0);
+            if fixed && self.sorted.binary_search(&e).is_err() {
                 self.fixed.push(e);
+            }
+            if let (Some(o), Some(r), Some(&d)) =
+                (self.lift_at.get_mut(i), rest.get(i), self.cone.dist.get(i))
+            {
+                *o = if fixed { f32::NEG_INFINITY } else { r[2] - d };
             }
         }
         self.scanned = self.cone.settled.len();
@@ -353,10 +396,12 @@ impl Body {
         let a1 = goal + top;
         lift.fit(self, seeds, offs, top);
         let rest = &self.lattice.rest_positions()[..n];
-        while let Some(r) = lift.reach(&self.pos, rest, a1) {
+        let mut all = true;
+        while let Some(r) = lift.reach(&self.pos, rest, a1, all) {
             lift.cone.grow(self, r + dz);
+            all = false;
         }
-        lift.scan(&self.flags);
+        lift.scan(&self.flags, rest);
         // The pinned (or otherwise held) elements the rise reaches stop it where the first of them
         // would have to move: at its height plus its distance.
         // (Read off the fixed elements and the distances alone, not the goal: a blocked pull stays
@@ -392,7 +437,8 @@ impl Body {
         // What rose by the seeds' rise (within a thousandth of it, as the chain reaction's raise
         // takes it) rose as a body.
         let slack = 1e-3 * dz;
-        let (pos, flags) = (&mut self.pos[..n], &self.flags[..n]);
+        let (pos, lift_at) = (&mut self.pos[..n], &lift.lift_at[..n]);
+        let b1 = a1 - lift.base;
         let mut rigid = 0usize;
         for (w, &bits) in lift.blocks.iter().enumerate() {
             let mut x = bits;
@@ -401,8 +447,8 @@ impl Body {
                 x &= x - 1;
                 let range = b * BLOCK..((b + 1) * BLOCK).min(n);
                 for j in range {
-                    let (new, z) = (lift.height(rest, a1, j), pos[j][2]);
-                    if new > z && flags[j] & FIXED == 0 {
+                    let (new, z) = (b1 + lift_at[j], pos[j][2]);
+                    if new > z {
                         if (new - z - dz).abs() > slack {
                             ws.stamp[j] = g;
                             ws.old[j] = pos[j];
