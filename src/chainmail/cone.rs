@@ -199,7 +199,7 @@ impl Cone {
 }
 
 /// Elements per bit of a lift's map of where its cone has settled elements.
-const BLOCK: usize = 256;
+const BLOCK: usize = 64;
 
 /// A lift along the normal kept as a cone (`docs/implicit-lift.md`): while the same elements are held
 /// and nothing is cut, torn, pinned or given a new material, the distances `D` from them stay true, and
