@@ -54,7 +54,8 @@ pub struct Cone {
     /// weight, negative ones too, is exact.
     rest: bool,
     /// The elements reached (pushed on the heap) since the list was last emptied, by
-    /// `ConeLift::reach`, which looks again only at these after a growth.
+    /// `ConeLift::reach`, which looks again only at these after a growth (kept for a cone relative to
+    /// the rest heights only: the lift's).
     pushed: Vec<u32>,
 }
 
@@ -164,7 +165,9 @@ impl Cone {
                     }
                     *d = nd;
                     heap.push(Reverse(key(nd, y)));
-                    pushed.push(y);
+                    if rest {
+                        pushed.push(y);
+                    }
                 }
             };
             let slots = u * w..(u + 1) * w;
@@ -227,8 +230,6 @@ pub struct ConeLift {
     /// reads this and the heights alone (4 bytes an element beside the positions' 12, not the
     /// distances', the rest positions' and the flags' 17).
     lift_at: Vec<f32>,
-    /// How many lifts the cone made (for tests).
-    pub(crate) lifts: u64,
     /// The lowest rest height of a seed (the cone's distances are relative to it).
     base: f32,
 }
@@ -237,16 +238,6 @@ impl ConeLift {
     /// No cone yet.
     pub fn new() -> Self {
         Self::default()
-    }
-
-    /// Forgets the cone: the next lift starts one.
-    pub fn clear(&mut self) {
-        self.key = None;
-    }
-
-    /// How many lifts the cone made.
-    pub fn lifts(&self) -> u64 {
-        self.lifts
     }
 
     /// Starts the cone again if the seeds, their offsets or the body changed since it was started.
@@ -292,10 +283,11 @@ impl ConeLift {
         self.cone.start_at(body, seeds.iter().zip(offs).map(|(&s, &o)| (s, top - o + r(s) - base)), true);
     }
 
-    /// The height the cone gives element `j` when the highest seed is at `a`: `a - D[j]`.
+    /// The height the cone gives element `j` at distance `d` (relative to rest: the cone's) when the
+    /// highest seed is at `a`: `a - D[j]`.
     #[inline(always)]
-    fn height(&self, rest: &[[f32; 3]], a: f32, j: usize) -> f32 {
-        (a - self.base) - self.cone.dist[j] + rest[j][2]
+    fn height(&self, rest: &[[f32; 3]], a: f32, d: f32, j: usize) -> f32 {
+        (a - self.base) - d + rest[j][2]
     }
 
     /// The largest distance of an element reached and not settled that a rise of the highest seed to
@@ -310,7 +302,7 @@ impl ConeLift {
             if d != du || du <= self.cone.radius || u >= rest.len() {
                 return; // stale, or settled
             }
-            if (a1 - self.base) - du + rest[u][2] > p[2] {
+            if self.height(rest, a1, du, u) > p[2] {
                 reach = Some(reach.map_or(du, |r: f32| r.max(du)));
             }
         };
@@ -408,7 +400,7 @@ impl Body {
         // blocked however far it asks, as `tissue::grasp::BlockedPull` assumes.)
         let stop = lift.fixed.iter().fold(f32::INFINITY, |m, &p| {
             let p = p as usize;
-            m.min(self.pos[p][2] - lift.height(rest, 0.0, p))
+            m.min(self.pos[p][2] - lift.height(rest, 0.0, lift.cone.dist[p], p))
         });
         let a0 = c + top;
         let (a1, fraction) = if stop < a1 {
@@ -463,14 +455,13 @@ impl Body {
             }
         }
         ws.lift.unlisted_count = rigid;
-        lift.lifts += 1;
         self.note_motion();
         Some(((ws.moved.len() + rigid) as u32, fraction))
     }
 }
 
-/// How far a seed may lie from where its offset hangs it, and a fixed element under the cone, in the
-/// lattice's units (metres): a few rounding errors of a height.
+/// How far a seed may lie from where its offset hangs it, in the lattice's units (metres): a few
+/// rounding errors of a height.
 const HANG: f32 = 1e-9;
 
 /// The reference for [`Cone`]: each element's least distance from `seeds` over the same edges, found

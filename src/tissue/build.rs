@@ -593,6 +593,8 @@ impl Tissue {
             in_active: crate::chainmail::touched(n, false),
             last_move: crate::chainmail::touched(n, 0.0),
             region_scratch: Vec::with_capacity(n),
+            #[cfg(test)]
+            stepped_region: Vec::new(),
             region_bits: Vec::with_capacity(n.div_ceil(64)),
             moved_bits: vec![0; n.div_ceil(64)],
             moved_pending: false,

@@ -302,6 +302,10 @@ pub struct Tissue {
     /// 0 outside the region), for pruning the region.
     pub(crate) last_move: Vec<f32>,
     pub(crate) region_scratch: Vec<ElementId>,
+    /// The region as the last step's relaxation, contact and repair left it, before it was pruned
+    /// (for tests that tell what relaxation moved from what a pull moved).
+    #[cfg(test)]
+    pub(crate) stepped_region: Vec<ElementId>,
     /// A bit per element, for putting the region in order.
     pub(crate) region_bits: Vec<u64>,
     /// A bit per element the step's chain reactions moved and the region has not taken in yet: they
@@ -741,6 +745,8 @@ impl Tissue {
     /// moved nothing afterwards; otherwise shrinks it to what still moves (see `settle.rs`).
     pub fn end_step(&mut self) {
         self.take_moved();
+        #[cfg(test)]
+        self.stepped_region.clone_from(&self.active);
         if matches!(self.geometry, Geometry::Surface(_)) {
             self.drift(); // before the region forgets what moved
         }
