@@ -595,8 +595,8 @@ impl Tissue {
             region_scratch: Vec::with_capacity(n),
             #[cfg(test)]
             stepped_region: Vec::new(),
-            region_bits: Vec::with_capacity(n.div_ceil(64)),
-            moved_bits: vec![0; n.div_ceil(64)],
+            region_bits: super::bits::Bits::new(n),
+            moved_bits: super::bits::Bits::new(n),
             moved_pending: false,
             relax_cursor: 0,
             swept: None,

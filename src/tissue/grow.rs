@@ -14,6 +14,7 @@
 //! exercise's final lift at 256 x 192: 25 000): the plain path took about 265 us of such a step on
 //! the AVX2 machine, 10 ns a moved element.
 
+use super::bits::Bits;
 use crate::chainmail::Lattice;
 
 /// Fewest elements a pattern of offsets has to be worth a mask (a 256th of the lattice). A sixteenth
@@ -48,7 +49,7 @@ pub(crate) struct Growth {
     /// Elements of no pattern, as bits.
     rest: Vec<u64>,
     /// The moved elements grown by their neighbours (scratch, all clear between growths).
-    grown: Vec<u64>,
+    grown: Bits,
 }
 
 impl Growth {
@@ -106,43 +107,24 @@ impl Growth {
                 None => self.rest[e / 64] |= bit,
             }
         }
-        self.grown = vec![0; words];
+        self.grown = Bits::new(n);
         self.n = n;
     }
 
-    /// Takes the elements in `moved` (bits, left clear) and calls `add` with each word of elements
-    /// they and their neighbours make, as bits (word index, bits; every word with a bit once, in
-    /// order). Bits of another length than the lattice's are left as they are (the region's
-    /// ordering grows by them the plain way first).
-    pub(crate) fn take(&mut self, lat: &Lattice, moved: &mut [u64], mut add: impl FnMut(usize, u64)) {
+    /// Takes the elements in `moved` (left empty) and calls `add` with each word of elements they and
+    /// their neighbours make, as bits (word index, bits; every word with a bit once, in order). Bits
+    /// of another length than the lattice's are left as they are (the region's ordering grows by
+    /// them the plain way first). Costs the words with a bit, not the lattice's.
+    pub(crate) fn take(&mut self, lat: &Lattice, moved: &mut Bits, add: impl FnMut(usize, u64)) {
         self.fit(lat);
-        let words = self.grown.len();
-        if moved.len() != words {
+        if moved.words() != self.grown.words() {
             return;
         }
-        let (Some(lo), Some(hi)) = (moved.iter().position(|&w| w != 0), moved.iter().rposition(|&w| w != 0))
-        else {
-            return;
-        };
-        // The words grown can reach: the moved words' span widened by the patterns' offsets (a word
-        // either side of the farthest), and any word an element of no pattern reaches.
-        let (below, above) = self
-            .patterns
-            .iter()
-            .flat_map(|p| &p.shifts)
-            .fold((0i64, 0i64), |(b, a), &(q, _)| (b.min(q - 1), a.max(q + 1)));
-        let clamp = |w: i64| w.clamp(0, words as i64 - 1) as usize;
-        let (mut first, mut last) = (clamp(lo as i64 + below), clamp(hi as i64 + above));
-        let grown = &mut self.grown[..];
-        for w in lo..=hi {
-            let x = moved[w];
-            if x == 0 {
-                continue;
-            }
-            moved[w] = 0;
-            grown[w] |= x;
-            for p in &self.patterns {
-                let part = x & p.mask[w];
+        let (patterns, rest, grown) = (&self.patterns, &self.rest, &mut self.grown);
+        moved.drain(|w, x| {
+            grown.or(w, x);
+            for p in patterns {
+                let part = x & p.mask.get(w).copied().unwrap_or(0);
                 if part == 0 {
                     continue;
                 }
@@ -152,23 +134,17 @@ impl Growth {
                     // `w + off.div_euclid(64)` from bit `r`, and the next.
                     let q = w as i64 + words_off;
                     if let Ok(q) = usize::try_from(q) {
-                        if let Some(g) = grown.get_mut(q) {
-                            *g |= part << r;
-                        }
-                        if r != 0
-                            && let Some(g) = grown.get_mut(q + 1)
-                        {
-                            *g |= part >> (64 - r);
+                        grown.or(q, part << r);
+                        if r != 0 {
+                            grown.or(q + 1, part >> (64 - r));
                         }
                     } else if r != 0 && q == -1 {
                         // (Only the high part lands in the lattice: word 0.)
-                        if let Some(g) = grown.get_mut(0) {
-                            *g |= part >> (64 - r);
-                        }
+                        grown.or(0, part >> (64 - r));
                     }
                 }
             }
-            let mut odd = x & self.rest[w];
+            let mut odd = x & rest.get(w).copied().unwrap_or(0);
             while odd != 0 {
                 let e = w * 64 + odd.trailing_zeros() as usize;
                 odd &= odd - 1;
@@ -176,20 +152,11 @@ impl Growth {
                     continue;
                 };
                 for &m in lat.adj_nbr.get(s0 as usize..s1 as usize).unwrap_or_default() {
-                    let m = m as usize;
-                    if let Some(g) = grown.get_mut(m / 64) {
-                        *g |= 1 << (m % 64);
-                        first = first.min(m / 64);
-                        last = last.max(m / 64);
-                    }
+                    grown.set(m as usize);
                 }
             }
-        }
-        for (w, g) in grown.iter_mut().enumerate().take(last + 1).skip(first) {
-            if *g != 0 {
-                add(w, std::mem::take(g));
-            }
-        }
+        });
+        grown.drain(add);
     }
 }
 
@@ -281,9 +248,9 @@ mod tests {
             let lat = t.body().lattice();
             let n = t.body().element_count();
             let moved: Vec<u32> = picks.iter().map(|p| p % n as u32).collect();
-            let mut bits = vec![0u64; n.div_ceil(64)];
+            let mut bits = Bits::new(n);
             for &e in &moved {
-                bits[e as usize / 64] |= 1 << (e % 64);
+                bits.set(e as usize);
             }
             let mut g = Growth::default();
             // Twice: the scratch is left clear for the next growth.
@@ -299,7 +266,9 @@ mod tests {
                         x &= x - 1;
                     }
                 });
-                prop_assert!(b.iter().all(|&w| w == 0), "moved bits left");
+                let mut left = 0;
+                b.drain(|_, _| left += 1);
+                prop_assert!(left == 0, "moved bits left");
                 prop_assert!(words.windows(2).all(|p| p[0] < p[1]), "words out of order or twice");
                 prop_assert_eq!(got, plain(lat, &moved));
             }

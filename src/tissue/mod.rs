@@ -12,6 +12,7 @@
 //! Must not import wgpu, winit or egui. Topology changes (cuts, tears) happen only in
 //! [`Tissue::apply_cuts`] and [`Tissue::apply_tears`], which bump [`Tissue::topology_version`].
 
+mod bits;
 mod build;
 mod cut;
 mod fem_drive;
@@ -306,12 +307,12 @@ pub struct Tissue {
     /// (for tests that tell what relaxation moved from what a pull moved).
     #[cfg(test)]
     pub(crate) stepped_region: Vec<ElementId>,
-    /// A bit per element, for putting the region in order.
-    pub(crate) region_bits: Vec<u64>,
+    /// A bit per element, for putting the region in order (empty between steps).
+    pub(crate) region_bits: bits::Bits,
     /// A bit per element the step's chain reactions moved and the region has not taken in yet: they
     /// and their neighbours join it in memory order ([`Tissue::take_moved`]), not in the order a
     /// reaction reached them (a lifting step moves tens of thousands).
-    pub(crate) moved_bits: Vec<u64>,
+    pub(crate) moved_bits: bits::Bits,
     /// Whether `moved_bits` holds any bit.
     pub(crate) moved_pending: bool,
     /// Where the next partial relaxation sweep of a large region starts (an element id; see
@@ -594,18 +595,15 @@ impl Tissue {
         self.step_moved += self.ws.moved.len() + self.ws.raised_unlisted();
         let n = self.body.element_count();
         self.repair.fit(n);
-        if self.moved_bits.len() != n.div_ceil(64) {
-            self.moved_bits = vec![0; n.div_ceil(64)];
-        }
-        // Two loops with their arrays borrowed once, and whether any element was marked kept in a
-        // local (a lift moves tens of thousands of elements a step; one loop kept its state in memory).
-        let (moved, bits) = (&self.ws.moved[..], &mut self.moved_bits[..]);
+        self.moved_bits.fit(n);
+        // Two loops with their arrays borrowed once (a lift moves tens of thousands of elements a
+        // step; one loop kept its state in memory).
+        let (moved, bits) = (&self.ws.moved[..], &mut self.moved_bits);
         self.repair.note_all(moved, &self.ws.old);
         let mut any = false;
         for &e in moved {
-            let e = e as usize;
-            if let Some(w) = bits.get_mut(e / 64) {
-                *w |= 1 << (e % 64);
+            if (e as usize) < n {
+                bits.set(e as usize);
                 any = true;
             }
         }
@@ -633,8 +631,7 @@ impl Tissue {
                 }
             }
         };
-        for (w, word) in self.moved_bits.iter_mut().enumerate() {
-            let mut x = std::mem::take(word);
+        self.moved_bits.drain(|w, mut x| {
             while x != 0 {
                 let e = w * 64 + x.trailing_zeros() as usize;
                 x &= x - 1;
@@ -644,7 +641,7 @@ impl Tissue {
                     activate(n as usize);
                 }
             }
-        }
+        });
     }
 
     /// The deformation passes of this tissue, in order: `[Plane, Normal]` on a surface, `[All]` in a

@@ -156,28 +156,24 @@ impl Tissue {
         let n = self.body.element_count();
         // (The moved elements' bits are sized for the body, as the growth's masks are; if they ever
         // were not, the plain path puts them in.)
-        if self.moved_pending && self.moved_bits.len() != n.div_ceil(64) {
+        if self.moved_pending && self.moved_bits.words() != n.div_ceil(64) {
             self.take_moved();
         }
+        // (Empty: the last call took every bit out.)
         let bits = &mut self.region_bits;
-        bits.clear();
-        bits.resize(n.div_ceil(64), 0);
+        bits.fit(n);
         // The region is mostly in order already (last step's, in order, and what joined since): a
         // word is gathered while its elements follow one another and written once.
         let (mut word, mut x) = (usize::MAX, 0u64);
         for e in &self.active {
             let w = e.index() / 64;
             if w != word {
-                if let Some(b) = bits.get_mut(word) {
-                    *b |= x;
-                }
+                bits.or(word, x);
                 (word, x) = (w, 0);
             }
             x |= 1 << (e.index() % 64);
         }
-        if let Some(b) = bits.get_mut(word) {
-            *b |= x;
-        }
+        bits.or(word, x);
         if self.moved_pending {
             self.moved_pending = false;
             // Every element joining is marked as moving (what `take_moved` marks); only elements
@@ -188,7 +184,7 @@ impl Tissue {
                 let first = w * 64;
                 if x == u64::MAX && first + 64 <= within {
                     last_move[first..first + 64].fill(f32::INFINITY);
-                    bits[w] |= x;
+                    bits.or(w, x);
                     return;
                 }
                 // Only elements within both arrays: all of the word's but past the end.
@@ -199,7 +195,7 @@ impl Tissue {
                 } else {
                     0
                 };
-                bits[w] |= y;
+                bits.or(w, y);
                 let mut y = y;
                 while y != 0 {
                     last_move[first + y.trailing_zeros() as usize] = f32::INFINITY;
@@ -211,13 +207,14 @@ impl Tissue {
         let mut active = std::mem::take(&mut self.active);
         active.clear();
         let in_active = &mut self.in_active[..];
-        for (w, &word) in bits.iter().enumerate() {
+        // The words with a bit, in order (not every word of the body), left empty.
+        bits.drain(|w, word| {
             let first = w * 64;
             // A whole word of the region (most of a large one): its 64 elements at once.
             if word == u64::MAX && first + 64 <= in_active.len() {
                 active.extend((first as u32..first as u32 + 64).map(crate::chainmail::ElementId));
                 in_active[first..first + 64].fill(true);
-                continue;
+                return;
             }
             let mut x = word;
             while x != 0 {
@@ -228,7 +225,7 @@ impl Tissue {
                     *a = true;
                 }
             }
-        }
+        });
         self.active = active;
     }
 
