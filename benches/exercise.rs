@@ -6,9 +6,11 @@
 //! Criterion reports the mean step; p50 and p99 of the steps timed are printed after each bench
 //! (a step's cost depends on where in the script it falls, so the tail matters as much as the mean),
 //! with the p99 of the steps' CPU time (the thread's own: on a busy machine the wall time's tail is
-//! mostly other processes taking the core). When the script ends the world is rebuilt outside the
-//! timed region and the script starts again. The steps run as the trainer's simulation thread runs
-//! them: on a worker of a rayon pool of its own (`dissect::chainmail::worker_pool`).
+//! mostly other processes taking the core). After each exercise, how many times its mean step grows
+//! from one resolution to the next (issue 14's budget: under 2 from 256 x 192 to 512 x 384). When the
+//! script ends the world is rebuilt outside the timed region and the script starts again. The steps
+//! run as the trainer's simulation thread runs them: on a worker of a rayon pool of its own
+//! (`dissect::chainmail::worker_pool`).
 
 use std::time::{Duration, Instant};
 
@@ -71,6 +73,9 @@ fn exercise_benches(c: &mut Criterion) {
 
 fn exercise(c: &mut Criterion, name: &str, scene: &str, script: &Script, sizes: &[(u32, u32)]) {
     let mut group = c.benchmark_group(format!("exercise/{name}"));
+    // Each size's mean step over whole sessions, for the growth from one size to the next (issue 14's
+    // budget: 512 x 384's mean under twice 256 x 192's).
+    let mut means: Vec<((u32, u32), f32)> = Vec::new();
     group.sample_size(10).measurement_time(Duration::from_secs(10)).warm_up_time(Duration::from_secs(2));
     for &(nu, nv) in sizes {
         // Built on first use: a bench the filter leaves out builds no world.
@@ -117,8 +122,15 @@ fn exercise(c: &mut Criterion, name: &str, scene: &str, script: &Script, sizes: 
             s.max,
             c.p99
         );
+        means.push(((nu, nv), s.mean));
     }
     group.finish();
+    for pair in means.windows(2) {
+        let [((u0, v0), m0), ((u1, v1), m1)] = [pair[0], pair[1]];
+        if m0 > 0.0 {
+            println!("exercise/{name}: the mean step grows {:.2} times from {u0}x{v0} to {u1}x{v1}", m1 / m0);
+        }
+    }
 }
 
 criterion_group!(benches, exercise_benches);
