@@ -75,6 +75,7 @@ pub use reaction::{Deformation, Pass};
 pub(crate) use relax::sweeps_within;
 pub use relax::{Coarse, RelaxBudget, RelaxRegion, RelaxReport};
 pub use schedule::worker_pool;
+pub(crate) use simd::Prefetch;
 pub use simd::{SIMD_ENV, SimdLevel};
 pub use workspace::Workspace;
 pub(crate) use workspace::touched;

@@ -107,6 +107,42 @@ impl SimdLevel {
     }
 }
 
+/// Hints that fetch a cache line ahead of its use, for loops that read scattered elements in an order
+/// known ahead (a region's list): SSE's `prefetcht0`, through pulp's checked wrapper, where the level
+/// allows AVX2 on x86-64; nothing elsewhere. A hint never faults and changes no result, only when
+/// the data arrives.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Prefetch {
+    #[cfg(target_arch = "x86_64")]
+    v3: Option<pulp::x86::V3>,
+}
+
+impl Prefetch {
+    /// Hints for `level` (none below AVX2).
+    pub(crate) fn new(level: SimdLevel) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            Self { v3: level.v3() }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = level;
+            Self {}
+        }
+    }
+
+    /// Fetches the line that holds `slice[i]` (or would: an index past the end is only a hint too).
+    #[inline(always)]
+    pub(crate) fn at<T>(self, slice: &[T], i: usize) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v3) = self.v3 {
+            v3.sse._mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(slice.as_ptr().wrapping_add(i).cast());
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (slice, i);
+    }
+}
+
 impl Default for SimdLevel {
     /// [`SimdLevel::from_env`].
     fn default() -> Self {

@@ -10,7 +10,11 @@ use super::kernel::relaxed_bounded;
 use crate::chainmail::body::{Body, FIXED};
 use crate::chainmail::coords::clamp;
 use crate::chainmail::ids::ElementId;
-use crate::chainmail::simd::SimdLevel;
+use crate::chainmail::simd::{Prefetch, SimdLevel};
+
+/// How many elements ahead of the one it relaxes the sweep asks for the next elements' rows, position
+/// and rest position (the tear scan's distance, `tissue/scan.rs`).
+const AHEAD: usize = 16;
 
 impl Body {
     /// One sweep over the elements of `part` (the first slice, then the second) in place: returns the
@@ -23,8 +27,8 @@ impl Body {
         last_move: &mut [f32],
     ) -> f32 {
         match (self.width, self.pairs.width) {
-            (5, 4) => simd.arch().dispatch(Sweep::<5, 4> { body: self, part, last_move }),
-            (4, 0) => simd.arch().dispatch(Sweep::<4, 0> { body: self, part, last_move }),
+            (5, 4) => simd.arch().dispatch(Sweep::<5, 4> { body: self, simd, part, last_move }),
+            (4, 0) => simd.arch().dispatch(Sweep::<4, 0> { body: self, simd, part, last_move }),
             _ => self.sweep_region_plain(part, last_move),
         }
     }
@@ -50,6 +54,7 @@ impl Body {
     #[inline(always)]
     fn sweep_region_rows<const W: usize, const P: usize>(
         &mut self,
+        simd: SimdLevel,
         part: [&[ElementId]; 2],
         last_move: &mut [f32],
     ) -> f32 {
@@ -59,8 +64,21 @@ impl Body {
         let (pair_nbr, pair_class, pairs) = (&self.pairs.nbr[..], &self.pairs.class[..], &self.pairs);
         let pos = &mut self.pos[..];
         let mut change = 0.0f32;
-        for &e in part.into_iter().flatten() {
+        let fetch = Prefetch::new(simd);
+        for (k, list, &e) in part.into_iter().flat_map(|l| l.iter().enumerate().map(move |(k, e)| (k, l, e)))
+        {
             let i = e.index();
+            // The region's elements lie apart in memory: their rows are asked for ahead (`AHEAD`).
+            if let Some(f) = list.get(k + AHEAD) {
+                let f = f.index();
+                fetch.at(slot_nbr, f * W);
+                fetch.at(slot_class, f * W);
+                fetch.at(pos, f);
+                fetch.at(rest, f);
+                if P > 0 {
+                    fetch.at(pair_nbr, f * P);
+                }
+            }
             let p = pos[i];
             let q = if flags[i] & FIXED != 0 {
                 p
@@ -117,6 +135,7 @@ impl Body {
 /// A sweep of fixed-width rows, for pulp's dispatch.
 struct Sweep<'a, const W: usize, const P: usize> {
     body: &'a mut Body,
+    simd: SimdLevel,
     part: [&'a [ElementId]; 2],
     last_move: &'a mut [f32],
 }
@@ -126,7 +145,7 @@ impl<const W: usize, const P: usize> pulp::WithSimd for Sweep<'_, W, P> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> f32 {
-        self.body.sweep_region_rows::<W, P>(self.part, self.last_move)
+        self.body.sweep_region_rows::<W, P>(self.simd, self.part, self.last_move)
     }
 }
 
