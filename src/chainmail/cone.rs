@@ -34,6 +34,7 @@ use dary_heap::QuaternaryHeap;
 
 use super::body::{Body, FIXED, HELD, PINNED};
 use super::ids::ElementId;
+use super::simd::{Prefetch, SimdLevel};
 use super::workspace::Workspace;
 
 /// The least distances over a body's bounds along the third coordinate from a set of seeds, settled
@@ -578,7 +579,20 @@ impl pulp::WithSimd for TentV3<'_, '_> {
             (avx._mm256_set1_ps(tent.b1), avx._mm256_set1_ps(tent.dz), avx._mm256_set1_ps(tent.slack));
         let magnitude = avx._mm256_castsi256_ps(avx._mm256_set1_epi32(0x7fff_ffff));
         let mut rigid = 0usize;
-        for b in block_indices(blocks) {
+        let fetch = Prefetch::new(SimdLevel::Avx2);
+        let mut order = block_indices(blocks).peekable();
+        while let Some(b) = order.next() {
+            // Blocks follow each other with gaps, each too short a run for the hardware to fetch
+            // ahead of: the next block's lines are asked for while this one is written.
+            if let Some(&c) = order.peek() {
+                let c = c * BLOCK;
+                for k in (0..BLOCK).step_by(16) {
+                    fetch.at(tent.lift_at, c + k);
+                }
+                for k in (0..BLOCK).step_by(5) {
+                    fetch.at(tent.pos, c + k);
+                }
+            }
             let end = ((b + 1) * BLOCK).min(n);
             let mut j = b * BLOCK;
             while j + 8 <= end {
