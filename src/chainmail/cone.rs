@@ -135,6 +135,9 @@ impl Cone {
         let (slot_nbr, slot_class, pairs) = (&body.slot_nbr[..], &body.slot_class[..], &body.pairs);
         let rest_pos = body.lattice.rest_positions();
         let rest = self.rest && rest_pos.len() == body.pos.len();
+        let (pair_nbr, pw) = (&pairs.nbr[..], pairs.width);
+        // (Hints only: the environment's level, not a workspace's.)
+        let fetch = Prefetch::new(SimdLevel::from_env());
         let Self { dist, settled, touched, heap, class_hi, pushed, .. } = self;
         while let Some(&Reverse(k)) = heap.peek() {
             let (du, u) = (f32::from_bits((k >> 32) as u32), k as u32 as usize);
@@ -142,6 +145,16 @@ impl Cone {
                 break;
             }
             heap.pop();
+            // The next element to settle is most often the heap's top now: its rows are asked for
+            // while this one's neighbours are reached (the settled elements lie apart in memory).
+            if let Some(&Reverse(next)) = heap.peek() {
+                let v = next as u32 as usize;
+                fetch.at(slot_nbr, v * w);
+                fetch.at(slot_class, v * w);
+                fetch.at(pair_nbr, v * pw);
+                fetch.at(rest_pos, v);
+                fetch.at(dist, v);
+            }
             if dist.get(u).is_none_or(|&d| du > d) {
                 continue; // a stale entry: `u` was reached closer since
             }
