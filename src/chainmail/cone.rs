@@ -256,6 +256,19 @@ impl ConeLift {
         Self::default()
     }
 
+    /// Sizes the cone's per-element arrays for `body` ahead of its first lift (their memory written), so
+    /// that the first lift does not.
+    pub(crate) fn fit_body(&mut self, body: &Body) {
+        let n = body.pos.len();
+        if self.lift_at.len() != n {
+            self.lift_at = super::touched(n, f32::NEG_INFINITY);
+        }
+        if self.cone.dist.len() != n {
+            self.cone.dist = super::touched(n, f32::INFINITY);
+            self.cone.touched.clear();
+        }
+    }
+
     /// Starts the cone again if the seeds, their offsets or the body changed since it was started.
     fn fit(&mut self, body: &Body, seeds: &[u32], offs: &[f32], top: f32) {
         let key = (body.revision, body.shape);

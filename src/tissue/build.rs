@@ -625,6 +625,10 @@ impl Tissue {
         tissue.fit_coarse();
         tissue.repair.fit(n);
         tissue.fibre_sites = tissue.rest_fibre_sites();
+        // What the first step would otherwise do over the whole body: measure the drift from rest
+        // and size a lift's cone (a step then touches only what moves).
+        tissue.drift();
+        tissue.jaws.cone.fit_body(&tissue.body);
         tissue
     }
 }
