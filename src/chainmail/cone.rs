@@ -830,6 +830,7 @@ mod tests {
         assert!(plain[c + n].is_infinite());
         assert_eq!(cone.distance(ElementId((c + 1) as u32)), Some(plain[c + 1]));
     }
+
     /// What a lift's write leaves: the positions' bits, the count of elements that rose with the
     /// seeds, the moved list and the moved elements' marks.
     type Written = (Vec<[u32; 3]>, usize, Vec<u32>, Vec<(u32, [u32; 3], u32)>);

@@ -118,6 +118,12 @@ pub(crate) struct Prefetch {
 }
 
 impl Prefetch {
+    /// How many elements ahead of the one it works on a loop over a list of scattered elements asks
+    /// for the next ones' data. In the careful exercise (AVX2, medians of three runs a step,
+    /// 2026-11-30) the tear scan's contact and limits phase fell from 20.7-21.5 to 17.7-18.1 µs a step
+    /// at 256 × 192 and from 43.9-44.6 to 35.4-35.9 at 512 × 384, with 8, 16 or 32 alike.
+    pub(crate) const AHEAD: usize = 16;
+
     /// Hints for `level` (none below AVX2).
     pub(crate) fn new(level: SimdLevel) -> Self {
         #[cfg(target_arch = "x86_64")]

@@ -140,8 +140,11 @@ impl Tissue {
         for (i, &id) in region.iter().enumerate() {
             let e = id.index();
             // The region's elements lie apart in memory, each a fresh set of cache lines: the loop
-            // waits on them unless they are asked for ahead (see [`AHEAD`]).
-            if let Some(f) = region.get(i + AHEAD) {
+            // waits on them unless their first link records, adjacency and position are asked for
+            // ahead. (Also asking for the element's rest position, last move and stamp did not help;
+            // asking, half as far ahead, for the link states, the neighbours' positions and their last
+            // moves was slower: 24 and 46 µs for the phase.)
+            if let Some(f) = region.get(i + Prefetch::AHEAD) {
                 let f = f.index();
                 if let (Some(&t), Some(&a)) = (start.get(f), adj_start.get(f)) {
                     fetch.at(table, t as usize);
@@ -204,14 +207,6 @@ impl Tissue {
         max_stretch2
     }
 }
-
-/// How many elements ahead of the one it checks the scan asks for the next elements' first link
-/// records, adjacency and position. In the careful exercise (AVX2, medians of three runs a step,
-/// 2026-11-30) the contact and limits phase fell from 20.7-21.5 to 17.7-18.1 µs a step at 256 × 192
-/// and from 43.9-44.6 to 35.4-35.9 at 512 × 384, with 8, 16 or 32 alike; also asking for the rest
-/// position, the last move and the stamp of the element did not help, nor, half as far ahead, the
-/// link states, the neighbours' positions and their last moves (slower: 24 and 46 µs).
-const AHEAD: usize = 16;
 
 /// Regions of fewer elements are scanned on one thread: a second thread costs more than it saves.
 /// (8 192 while the stepping thread could be held up by a helper without a core, see

@@ -12,10 +12,6 @@ use crate::chainmail::coords::clamp;
 use crate::chainmail::ids::ElementId;
 use crate::chainmail::simd::{Prefetch, SimdLevel};
 
-/// How many elements ahead of the one it relaxes the sweep asks for the next elements' rows, position
-/// and rest position (the tear scan's distance, `tissue/scan.rs`).
-const AHEAD: usize = 16;
-
 impl Body {
     /// One sweep over the elements of `part` (the first slice, then the second) in place: returns the
     /// largest coordinate move and writes each element's to `last_move`. The fixed-width rows are compiled for the widest vectors `simd` and the machine allow (pulp
@@ -68,8 +64,8 @@ impl Body {
         for (k, list, &e) in part.into_iter().flat_map(|l| l.iter().enumerate().map(move |(k, e)| (k, l, e)))
         {
             let i = e.index();
-            // The region's elements lie apart in memory: their rows are asked for ahead (`AHEAD`).
-            if let Some(f) = list.get(k + AHEAD) {
+            // The region's elements lie apart in memory: their rows are asked for ahead.
+            if let Some(f) = list.get(k + Prefetch::AHEAD) {
                 let f = f.index();
                 fetch.at(slot_nbr, f * W);
                 fetch.at(slot_class, f * W);
