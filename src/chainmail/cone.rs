@@ -60,6 +60,9 @@ pub struct Cone {
     /// `ConeLift::reach`, which looks again only at these after a growth (kept for a cone relative to
     /// the rest heights only: the lift's).
     pushed: Vec<u32>,
+    /// The cone of a press (the seeds going down): every bound read the other way up, as the lower
+    /// bound of `-z` (each slot's and pair's `-lo` as the edge's weight, the rest heights negated).
+    down: bool,
 }
 
 /// An edge's weight from a bound's `hi`: not below zero; `None` for a slot that bounds nothing (a
@@ -112,7 +115,9 @@ impl Cone {
         self.pushed.clear();
         self.radius = f32::NEG_INFINITY;
         self.class_hi.clear();
-        self.class_hi.extend(body.classes.iter().map(|c| c.bounds[1][2]));
+        let down = self.down;
+        self.class_hi
+            .extend(body.classes.iter().map(|c| if down { -c.bounds[0][2] } else { c.bounds[1][2] }));
         for (e, d0) in seeds {
             let d0 = d0.max(0.0);
             if let Some(d) = self.dist.get_mut(e as usize)
@@ -130,11 +135,42 @@ impl Cone {
     /// Settles every element within `radius` of the seeds (and no further); returns how many this call
     /// settled. The body must have the slots, pairs and classes it had at [`Cone::start`].
     pub fn grow(&mut self, body: &Body, radius: f32) -> usize {
+        self.grow_where(body, radius, |_, _| true)
+    }
+
+    /// [`Cone::grow_where`] for a lift's cone or a press's (their loops compiled apart, so that a
+    /// lift's settles as it did before presses shared it).
+    #[inline(always)]
+    pub(crate) fn grow_where(
+        &mut self,
+        body: &Body,
+        radius: f32,
+        expand: impl Fn(usize, f32) -> bool,
+    ) -> usize {
+        if self.down {
+            self.grow_in::<true>(body, radius, expand)
+        } else {
+            self.grow_in::<false>(body, radius, expand)
+        }
+    }
+
+    /// [`Cone::grow`], going on from a settled element only where `expand(element, distance)` says
+    /// (a press's search that stops where the tissue need not move; its distances are then those of
+    /// paths through the elements expanded, not the least over every path); `DOWN` is `self.down`.
+    #[inline(always)]
+    fn grow_in<const DOWN: bool>(
+        &mut self,
+        body: &Body,
+        radius: f32,
+        expand: impl Fn(usize, f32) -> bool,
+    ) -> usize {
         let before = self.settled.len();
         let w = body.width;
         let (slot_nbr, slot_class, pairs) = (&body.slot_nbr[..], &body.slot_class[..], &body.pairs);
         let rest_pos = body.lattice.rest_positions();
         let rest = self.rest && rest_pos.len() == body.pos.len();
+        // A press reads every height the other way up (see `down`).
+        let sign = if DOWN { -1.0f32 } else { 1.0 };
         let (pair_nbr, pw) = (&pairs.nbr[..], pairs.width);
         // (Hints only: the environment's level, not a workspace's.)
         let fetch = Prefetch::new(SimdLevel::from_env());
@@ -159,10 +195,20 @@ impl Cone {
                 continue; // a stale entry: `u` was reached closer since
             }
             settled.push(u as u32);
-            let ru = if rest { rest_pos[u][2] } else { 0.0 };
+            if !expand(u, du) {
+                continue;
+            }
+            let ru = match (rest, DOWN) {
+                (false, _) => 0.0,
+                (true, false) => rest_pos[u][2],
+                (true, true) => sign * rest_pos[u][2],
+            };
             let mut relax = |y: u32, hi: f32| {
                 let wt = if rest {
-                    let Some(ry) = rest_pos.get(y as usize).map(|p| p[2]) else { return };
+                    let Some(ry) = rest_pos.get(y as usize).map(|p| if DOWN { sign * p[2] } else { p[2] })
+                    else {
+                        return;
+                    };
                     if !hi.is_finite() {
                         return;
                     }
@@ -194,9 +240,9 @@ impl Cone {
                     }
                 }
             }
-            for (y, [_, hi]) in pairs.row(u) {
+            for (y, [lo, hi]) in pairs.row(u) {
                 if y as usize != u {
-                    relax(y, hi);
+                    relax(y, if DOWN { -lo } else { hi });
                 }
             }
         }
@@ -246,8 +292,19 @@ pub struct ConeLift {
     /// reads this and the heights alone (4 bytes an element beside the positions' 12, not the
     /// distances', the rest positions' and the flags' 17).
     lift_at: Vec<f32>,
-    /// The lowest rest height of a seed (the cone's distances are relative to it).
+    /// The lowest rest height of a seed (the cone's distances are relative to it; for a press, of the
+    /// heights the other way up).
     base: f32,
+    /// A press ([`ConeLift::pressing`]): the seeds go down, every element to `min(z, A' + D)`.
+    down: bool,
+    /// A press's last level (the deepest seed's goal, heights the other way up), while its cone is
+    /// the same.
+    pressed: Option<f32>,
+    /// A press's offsets as the cone takes them (scratch).
+    kept: Vec<f32>,
+    /// A press's cone holds the least distances (grown by radius), not a search that stopped where
+    /// the tissue need not move: it may be kept for the next press.
+    complete: bool,
 }
 
 impl ConeLift {
@@ -256,12 +313,37 @@ impl ConeLift {
         Self::default()
     }
 
+    /// A press's cone (the probe's): the seeds go down and every other element to `min(z, A' + D)`,
+    /// `D` the least distances over the bounds read the other way up (each one's lower bound along
+    /// the normal). The seeds need not be held. The same code as a lift's, every height negated.
+    pub fn pressing() -> Self {
+        Self { down: true, cone: Cone { down: true, ..Cone::default() }, ..Self::default() }
+    }
+
+    /// Whether a press's cone holds the least distances (it is kept while the footprint stays), not
+    /// a search that went only through what moved.
+    pub fn is_complete(&self) -> bool {
+        self.complete
+    }
+
+    /// `1` for a lift, `-1` for a press: heights times this are the cone's.
+    #[inline(always)]
+    fn sign(&self) -> f32 {
+        if self.down { -1.0 } else { 1.0 }
+    }
+
+    /// What `lift_at` holds where nothing rises (or falls): infinitely low for a lift, high for a press.
+    #[inline(always)]
+    fn still(&self) -> f32 {
+        self.sign() * f32::NEG_INFINITY
+    }
+
     /// Sizes the cone's per-element arrays for `body` ahead of its first lift (their memory written), so
     /// that the first lift does not.
     pub(crate) fn fit_body(&mut self, body: &Body) {
         let n = body.pos.len();
         if self.lift_at.len() != n {
-            self.lift_at = super::touched(n, f32::NEG_INFINITY);
+            self.lift_at = super::touched(n, self.still());
         }
         if self.cone.dist.len() != n {
             self.cone.dist = super::touched(n, f32::INFINITY);
@@ -279,6 +361,7 @@ impl ConeLift {
         if same {
             return;
         }
+        self.pressed = None;
         self.key = Some(key);
         self.seeds.clear();
         self.seeds.extend_from_slice(seeds);
@@ -289,13 +372,14 @@ impl ConeLift {
         self.sorted.sort_unstable();
         // (What the last cone settled is forgotten first.)
         let n = body.pos.len();
+        let still = self.still();
         if self.lift_at.len() != n {
             self.lift_at.clear();
-            self.lift_at.resize(n, f32::NEG_INFINITY);
+            self.lift_at.resize(n, still);
         } else {
             for &e in &self.cone.settled {
                 if let Some(o) = self.lift_at.get_mut(e as usize) {
-                    *o = f32::NEG_INFINITY;
+                    *o = still;
                 }
             }
         }
@@ -306,17 +390,23 @@ impl ConeLift {
         // Heights relative to rest: a seed's distance is its depth under the highest plus its rest
         // height over the lowest seed's.
         let rest = body.lattice.rest_positions();
-        let r = |s: u32| rest.get(s as usize).map_or(0.0, |p| p[2]);
+        let sign = self.sign();
+        let r = |s: u32| rest.get(s as usize).map_or(0.0, |p| sign * p[2]);
         self.base = seeds.iter().fold(f32::INFINITY, |m, &s| m.min(r(s)));
         let base = self.base;
-        self.cone.start_at(body, seeds.iter().zip(offs).map(|(&s, &o)| (s, top - o + r(s) - base)), true);
+        self.cone.down = self.down;
+        self.cone.start_at(
+            body,
+            seeds.iter().zip(offs).map(|(&s, &o)| (s, top - sign * o + r(s) - base)),
+            true,
+        );
     }
 
     /// The height the cone gives element `j` at distance `d` (relative to rest: the cone's) when the
-    /// highest seed is at `a`: `a - D[j]`.
+    /// highest seed is at `a`: `a - D[j]` (for a press, heights the other way up).
     #[inline(always)]
     fn height(&self, rest: &[[f32; 3]], a: f32, d: f32, j: usize) -> f32 {
-        (a - self.base) - d + rest[j][2]
+        (a - self.base) - d + self.sign() * rest[j][2]
     }
 
     /// The largest distance of an element reached and not settled that a rise of the highest seed to
@@ -331,7 +421,7 @@ impl ConeLift {
             if d != du || du <= self.cone.radius || u >= rest.len() {
                 return; // stale, or settled
             }
-            if self.height(rest, a1, du, u) > p[2] {
+            if self.height(rest, a1, du, u) > self.sign() * p[2] {
                 reach = Some(reach.map_or(du, |r: f32| r.max(du)));
             }
         };
@@ -354,6 +444,7 @@ impl ConeLift {
     /// Looks at the elements settled since the last call: fixed ones (not seeds) are kept, and their
     /// blocks marked.
     fn scan(&mut self, flags: &[u8], rest: &[[f32; 3]]) {
+        let (sign, still) = (self.sign(), self.still());
         for &e in &self.cone.settled[self.scanned..] {
             let i = e as usize;
             if let Some(w) = self.blocks.get_mut(i / BLOCK / 64) {
@@ -366,7 +457,8 @@ impl ConeLift {
             if let (Some(o), Some(r), Some(&d)) =
                 (self.lift_at.get_mut(i), rest.get(i), self.cone.dist.get(i))
             {
-                *o = if fixed { f32::NEG_INFINITY } else { r[2] - d };
+                // (A press keeps `-(-r - d)`: its write then adds as a lift's does.)
+                *o = if fixed { still } else { sign * (sign * r[2] - d) };
             }
         }
         self.scanned = self.cone.settled.len();
@@ -405,7 +497,7 @@ impl Body {
         let &first = seeds.first()?;
         let c = self.pos.get(first as usize)?[2];
         let dz = goal - c;
-        if seeds.len() != offs.len() || !(dz > 0.0 && dz.is_finite()) {
+        if lift.down || seeds.len() != offs.len() || !(dz > 0.0 && dz.is_finite()) {
             return None;
         }
         for (&s, &o) in seeds.iter().zip(offs) {
@@ -471,10 +563,133 @@ impl Body {
             slack,
             marks: Marks { stamp, old, sponsor, moved, generation: g },
         };
-        let rigid = tent.write(&lift.blocks, simd);
+        let rigid = tent.write::<false>(&lift.blocks, simd);
         ws.lift.unlisted_count = rigid;
         self.note_motion();
         Some(((ws.moved.len() + rigid) as u32, fraction))
+    }
+}
+
+/// What a press asks of [`Body::press_by_cone`] (see there).
+pub(crate) struct Press<'a> {
+    /// The elements pressed (free ones).
+    pub(crate) seeds: &'a [u32],
+    /// Each seed's goal over `goal`.
+    pub(crate) offs: &'a [f32],
+    /// The height the seeds' offsets are taken from (the ball's lowest point).
+    pub(crate) goal: f32,
+    /// How far the offsets may drift from the cone's before it is started again.
+    pub(crate) tolerance: f32,
+    /// A footprint pressed again after a search through what moved starts a whole cone.
+    pub(crate) whole: bool,
+}
+
+impl Body {
+    /// The probe's press by a cone ([`ConeLift::pressing`]): the ball's footprint, `seeds` (free
+    /// elements), each to go down to `goal + offs[k]` (the ball's surface above it), and every element
+    /// to `min(z, A' + D)`: the highest heights at or below the heights before that meet every bound
+    /// along the normal with each seed at or below its goal. A seed already below its goal stays (a
+    /// ball pushes, it does not pull). Offsets within `tolerance` of the cone's keep the cone (the
+    /// footprint's elements drift across the surface by a little as relaxation settles them). With
+    /// `whole`, a press of the footprint of the last press, whose search went only through what moved,
+    /// starts a whole cone (to be kept); without, it searches through what moves again. Returns
+    /// the elements moved (listed in the workspace as [`Body::lift_by_cone`] lists them, the dent's
+    /// taut inside that went down by the ball's own move counted as
+    /// [`Workspace::raised_unlisted`]), or `None` where the cone does not apply (a seed pinned or
+    /// held, or not in the body; the chain reaction then presses).
+    ///
+    /// Pinned or held elements the press reaches stop it where the first of them would have to
+    /// move, as they stop a lift.
+    pub(crate) fn press_by_cone(
+        &mut self,
+        ws: &mut Workspace,
+        press: &mut ConeLift,
+        ball: &Press,
+    ) -> Option<u32> {
+        let Press { seeds, offs, goal, tolerance, whole } = *ball;
+        let n = self.pos.len();
+        if !press.down || seeds.is_empty() || seeds.len() != offs.len() || !goal.is_finite() {
+            return None;
+        }
+        for (&s, &o) in seeds.iter().zip(offs) {
+            let f = *self.flags.get(s as usize)?;
+            if f & FIXED != 0 || !o.is_finite() {
+                return None;
+            }
+        }
+        // The cone's own offsets while the footprint is the same and has drifted by less than the
+        // tolerance.
+        let same = press.key == Some((self.revision, self.shape))
+            && press.seeds == seeds
+            && press.offs.len() == offs.len()
+            && press.offs.iter().zip(offs).all(|(a, b)| (f32::from_bits(*a) - b).abs() <= tolerance);
+        let mut kept = std::mem::take(&mut press.kept);
+        kept.clear();
+        if same {
+            kept.extend(press.offs.iter().map(|&a| f32::from_bits(a)));
+        } else {
+            kept.extend_from_slice(offs);
+        }
+        // A ball pressing where it pressed last keeps its cone (grown by the ring each press reaches,
+        // written a block at a time); the first press of a footprint after a different one starts a
+        // whole cone. A ball sliding across the tissue (a new footprint every step or two) instead
+        // searches from the footprint only through what moves: the tissue was within every bound, so
+        // an element that need not move bounds nothing behind it that it did not bound before.
+        let restart = !(same && press.complete);
+        if restart {
+            press.key = None;
+        }
+        // Heights the other way up from here to the write: the deepest seed's goal is the level `a1`.
+        let top = kept.iter().fold(f32::NEG_INFINITY, |m, &o| m.max(-o));
+        let mut a1 = -goal + top;
+        press.fit(self, seeds, &kept, top);
+        press.kept = kept;
+        let rest = &self.lattice.rest_positions()[..n];
+        if restart {
+            press.complete = same && whole;
+        }
+        if press.complete {
+            // How far the ball went since the last press by this cone (none the first time).
+            let dz = press.pressed.map_or(0.0, |a0| (a1 - a0).max(0.0));
+            let mut all = true;
+            while let Some(r) = press.reach(&self.pos, rest, a1, all) {
+                press.cone.grow(self, r + dz);
+                all = false;
+            }
+        } else {
+            let (base, flags, pos) = (press.base, &self.flags[..n], &self.pos[..n]);
+            // (Heights the other way up: an element moves where its cone height lies above it.)
+            let moves =
+                |u: usize, du: f32| (a1 - base) - du - rest[u][2] > -pos[u][2] && flags[u] & FIXED == 0;
+            press.cone.grow_where(self, f32::INFINITY, moves);
+        }
+        press.scan(&self.flags, rest);
+        let stop = press.fixed.iter().fold(f32::INFINITY, |m, &p| {
+            let p = p as usize;
+            m.min(-self.pos[p][2] - press.height(rest, 0.0, press.cone.dist[p], p))
+        });
+        a1 = a1.min(stop);
+        let dz = press.pressed.map_or(0.0, |a0| a1 - a0);
+        press.pressed = Some(a1);
+        ws.fit(self);
+        ws.next_generation();
+        ws.lift.forget();
+        let simd = ws.simd();
+        let (stamp, old, sponsor, moved) = (&mut ws.stamp, &mut ws.old, &mut ws.sponsor, &mut ws.moved);
+        let tent = Tent {
+            pos: &mut self.pos[..n],
+            lift_at: &press.lift_at[..n],
+            b1: -(a1 - press.base),
+            dz: -dz,
+            slack: 1e-3 * dz.abs(),
+            marks: Marks { stamp, old, sponsor, moved, generation: ws.generation },
+        };
+        let rigid = tent.write::<true>(&press.blocks, simd);
+        ws.lift.unlisted_count = rigid;
+        if rigid + ws.moved.len() > 0 {
+            self.note_motion();
+        }
+        Some((ws.moved.len() + rigid) as u32)
     }
 }
 
@@ -516,34 +731,35 @@ impl Marks<'_> {
 impl Tent<'_> {
     /// Writes the blocks whose bits are set, at the widest level `simd` allows (the same heights,
     /// lists and count at every level); returns how many elements rose with the seeds.
-    fn write(self, blocks: &[u64], simd: super::SimdLevel) -> usize {
+    /// With `DOWN` (a press) every element goes to `min(z, b1 + lift_at)` instead.
+    fn write<const DOWN: bool>(self, blocks: &[u64], simd: super::SimdLevel) -> usize {
         #[cfg(target_arch = "x86_64")]
         if let Some(v3) = simd.v3() {
-            return pulp::Simd::vectorize(v3, TentV3 { tent: self, blocks, v3 });
+            return pulp::Simd::vectorize(v3, TentV3::<DOWN> { tent: self, blocks, v3 });
         }
         let _ = simd;
-        self.write_plain(blocks)
+        self.write_plain::<DOWN>(blocks)
     }
 
     /// The plain path: element by element.
-    fn write_plain(mut self, blocks: &[u64]) -> usize {
+    fn write_plain<const DOWN: bool>(mut self, blocks: &[u64]) -> usize {
         let n = self.pos.len();
         let mut rigid = 0;
         for b in block_indices(blocks) {
-            rigid += self.elements(b * BLOCK..((b + 1) * BLOCK).min(n));
+            rigid += self.elements::<DOWN>(b * BLOCK..((b + 1) * BLOCK).min(n));
         }
         rigid
     }
 
     /// Writes `range` element by element.
     #[inline(always)]
-    fn elements(&mut self, range: std::ops::Range<usize>) -> usize {
+    fn elements<const DOWN: bool>(&mut self, range: std::ops::Range<usize>) -> usize {
         let (b1, dz, slack) = (self.b1, self.dz, self.slack);
         let mut rigid = 0;
         for j in range {
             let (Some(p), Some(&l)) = (self.pos.get_mut(j), self.lift_at.get(j)) else { break };
             let (new, z) = (b1 + l, p[2]);
-            if new > z {
+            if if DOWN { new < z } else { new > z } {
                 if (new - z - dz).abs() > slack {
                     let was = *p;
                     p[2] = new;
@@ -577,19 +793,19 @@ fn block_indices(blocks: &[u64]) -> impl Iterator<Item = usize> + '_ {
 /// infinitely low, so that a lane-wise maximum writes the heights and leaves the rest as they were;
 /// the comparisons are the plain path's, lane by lane.
 #[cfg(target_arch = "x86_64")]
-struct TentV3<'a, 'b> {
+struct TentV3<'a, 'b, const DOWN: bool> {
     tent: Tent<'a>,
     blocks: &'b [u64],
     v3: pulp::x86::V3,
 }
 
 #[cfg(target_arch = "x86_64")]
-impl pulp::WithSimd for TentV3<'_, '_> {
+impl<const DOWN: bool> pulp::WithSimd for TentV3<'_, '_, DOWN> {
     type Output = usize;
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> usize {
-        use core::arch::x86_64::{__m256, _CMP_GT_OQ};
+        use core::arch::x86_64::{__m256, _CMP_GT_OQ, _CMP_LT_OQ};
         let TentV3 { mut tent, blocks, v3 } = self;
         let (avx, avx2) = (v3.avx, v3.avx2);
         let n = tent.pos.len();
@@ -600,7 +816,9 @@ impl pulp::WithSimd for TentV3<'_, '_> {
             avx._mm256_setr_epi32(2, 0, 0, 3, 0, 0, 4, 0),
             avx._mm256_setr_epi32(0, 5, 0, 0, 6, 0, 0, 7),
         ];
-        let low = avx._mm256_set1_ps(f32::NEG_INFINITY);
+        // (A press's lanes other than the heights are infinitely high, its comparison and write the
+        // other way.)
+        let low = avx._mm256_set1_ps(if DOWN { f32::INFINITY } else { f32::NEG_INFINITY });
         let (b1, dz, slack) =
             (avx._mm256_set1_ps(tent.b1), avx._mm256_set1_ps(tent.dz), avx._mm256_set1_ps(tent.slack));
         let magnitude = avx._mm256_castsi256_ps(avx._mm256_set1_epi32(0x7fff_ffff));
@@ -637,9 +855,15 @@ impl pulp::WithSimd for TentV3<'_, '_> {
                     avx._mm256_blend_ps::<0b0100_1001>(low, avx2._mm256_permutevar8x32_ps(l, spread[1]));
                 let new2 =
                     avx._mm256_blend_ps::<0b1001_0010>(low, avx2._mm256_permutevar8x32_ps(l, spread[2]));
-                let rise = (avx._mm256_movemask_ps(avx._mm256_cmp_ps::<_CMP_GT_OQ>(new0, was[0])) as u32)
-                    | (avx._mm256_movemask_ps(avx._mm256_cmp_ps::<_CMP_GT_OQ>(new1, was[1])) as u32) << 8
-                    | (avx._mm256_movemask_ps(avx._mm256_cmp_ps::<_CMP_GT_OQ>(new2, was[2])) as u32) << 16;
+                let rise = if DOWN {
+                    (avx._mm256_movemask_ps(avx._mm256_cmp_ps::<_CMP_LT_OQ>(new0, was[0])) as u32)
+                        | (avx._mm256_movemask_ps(avx._mm256_cmp_ps::<_CMP_LT_OQ>(new1, was[1])) as u32) << 8
+                        | (avx._mm256_movemask_ps(avx._mm256_cmp_ps::<_CMP_LT_OQ>(new2, was[2])) as u32) << 16
+                } else {
+                    (avx._mm256_movemask_ps(avx._mm256_cmp_ps::<_CMP_GT_OQ>(new0, was[0])) as u32)
+                        | (avx._mm256_movemask_ps(avx._mm256_cmp_ps::<_CMP_GT_OQ>(new1, was[1])) as u32) << 8
+                        | (avx._mm256_movemask_ps(avx._mm256_cmp_ps::<_CMP_GT_OQ>(new2, was[2])) as u32) << 16
+                };
                 if rise == 0 {
                     j += 8;
                     continue;
@@ -660,17 +884,25 @@ impl pulp::WithSimd for TentV3<'_, '_> {
                         tent.marks.list(j + k, w);
                     }
                 }
-                let out: [__m256; 3] = [
-                    avx._mm256_max_ps(new0, was[0]),
-                    avx._mm256_max_ps(new1, was[1]),
-                    avx._mm256_max_ps(new2, was[2]),
-                ];
+                let out: [__m256; 3] = if DOWN {
+                    [
+                        avx._mm256_min_ps(new0, was[0]),
+                        avx._mm256_min_ps(new1, was[1]),
+                        avx._mm256_min_ps(new2, was[2]),
+                    ]
+                } else {
+                    [
+                        avx._mm256_max_ps(new0, was[0]),
+                        avx._mm256_max_ps(new1, was[1]),
+                        avx._mm256_max_ps(new2, was[2]),
+                    ]
+                };
                 if let Some(p) = tent.pos.get_mut(j..).and_then(<[[f32; 3]]>::first_chunk_mut::<8>) {
                     *p = pulp::cast(out);
                 }
                 j += 8;
             }
-            rigid += tent.elements(j..end);
+            rigid += tent.elements::<DOWN>(j..end);
         }
         rigid
     }
@@ -711,6 +943,37 @@ pub fn distances_plain(body: &Body, seeds: &[ElementId]) -> Vec<f32> {
         }
     }
     d
+}
+
+/// The reference for a press ([`ConeLift::pressing`]): the heights when every seed goes to
+/// `min(z, goal)` and every bound along the normal pushes the element it bounds down as far as it
+/// must (`z[y] <= z[u] - lo` for each slot and pair of `u`), swept over every element until nothing
+/// falls. Fixed elements are treated as free: compare only presses that do not reach them.
+pub fn press_plain(body: &Body, seeds: &[(ElementId, f32)]) -> Vec<f32> {
+    let n = body.pos.len();
+    let mut z: Vec<f32> = body.pos.iter().map(|p| p[2]).collect();
+    for &(s, g) in seeds {
+        if let Some(x) = z.get_mut(s.index()) {
+            *x = x.min(g);
+        }
+    }
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for u in 0..n {
+            let zu = z[u];
+            let slots = (u * body.width..(u + 1) * body.width)
+                .map(|k| (body.slot_nbr[k], body.classes[body.slot_class[k] as usize].bounds[0][2]));
+            for (y, lo) in slots.chain(body.pairs.row(u).map(|(y, [lo, _])| (y, lo))) {
+                let y = y as usize;
+                if y != u && y < n && lo.is_finite() && zu - lo < z[y] {
+                    z[y] = zu - lo;
+                    changed = true;
+                }
+            }
+        }
+    }
+    z
 }
 
 #[cfg(test)]
@@ -836,18 +1099,20 @@ mod tests {
     type Written = (Vec<[u32; 3]>, usize, Vec<u32>, Vec<(u32, [u32; 3], u32)>);
 
     /// A lift's write at `level` over `heights` (each element's height and its `lift_at`, the
-    /// second absent for an element outside the cone).
+    /// second absent for an element outside the cone); with `down`, a press's (`dz` below zero).
     fn written(
         level: SimdLevel,
         heights: &[(f32, Option<f32>)],
         blocks: &[u64],
         b1: f32,
         dz: f32,
+        down: bool,
     ) -> Written {
         let n = heights.len();
         let mut pos: Vec<[f32; 3]> =
             heights.iter().enumerate().map(|(j, &(z, _))| [j as f32, 0.5, z]).collect();
-        let lift_at: Vec<f32> = heights.iter().map(|&(_, l)| l.unwrap_or(f32::NEG_INFINITY)).collect();
+        let still = if down { f32::INFINITY } else { f32::NEG_INFINITY };
+        let lift_at: Vec<f32> = heights.iter().map(|&(_, l)| l.unwrap_or(still)).collect();
         let (mut stamp, mut old, mut sponsor, mut moved) =
             (vec![0; n], vec![[0.0; 3]; n], vec![0; n], Vec::new());
         let marks = Marks {
@@ -857,8 +1122,8 @@ mod tests {
             moved: &mut moved,
             generation: 7,
         };
-        let tent = Tent { pos: &mut pos, lift_at: &lift_at, b1, dz, slack: 1e-3 * dz, marks };
-        let rigid = tent.write(blocks, level);
+        let tent = Tent { pos: &mut pos, lift_at: &lift_at, b1, dz, slack: 1e-3 * dz.abs(), marks };
+        let rigid = if down { tent.write::<true>(blocks, level) } else { tent.write::<false>(blocks, level) };
         let bits = |p: [f32; 3]| p.map(f32::to_bits);
         let marks =
             moved.iter().map(|&j| (stamp[j as usize], bits(old[j as usize]), sponsor[j as usize])).collect();
@@ -868,7 +1133,8 @@ mod tests {
     proptest! {
         /// The write of a lift with AVX2 (eight elements a time) gives the plain path's heights,
         /// lists, marks and count to the bit: elements that rise with the seeds, by less, not at all,
-        /// outside the cone, in blocks the cone has or has not settled, and a last block cut short.
+        /// outside the cone, in blocks the cone has or has not settled, and a last block cut short;
+        /// and the same for a press (the probe's), everything the other way up.
         #[test]
         fn the_vector_write_is_the_plain_write(
             heights in proptest::collection::vec(
@@ -878,20 +1144,22 @@ mod tests {
             blocks in any::<u64>(),
             b1 in -1.0f32..1.0,
             dz in 1e-4f32..0.5,
+            down in any::<bool>(),
         ) {
+            let dz = if down { -dz } else { dz };
             // Heights on the cone before the rise (so that most rise by `dz` exactly), over it, or
             // anywhere.
             let heights: Vec<(f32, Option<f32>)> = heights
                 .iter()
                 .map(|&(kind, z, l)| match (kind, l) {
                     (0 | 1, Some(l)) => ((b1 - dz) + l, Some(l)),
-                    (2, Some(l)) => (b1 + l + z.abs(), Some(l)),
+                    (2, Some(l)) => (b1 + l + if down { -z.abs() } else { z.abs() }, Some(l)),
                     _ => (z, l),
                 })
                 .collect();
             let blocks = [blocks | 1];
-            let plain = written(SimdLevel::Scalar, &heights, &blocks, b1, dz);
-            let vector = written(SimdLevel::Avx2, &heights, &blocks, b1, dz);
+            let plain = written(SimdLevel::Scalar, &heights, &blocks, b1, dz, down);
+            let vector = written(SimdLevel::Avx2, &heights, &blocks, b1, dz, down);
             prop_assert_eq!(plain, vector);
         }
     }

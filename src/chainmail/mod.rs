@@ -63,7 +63,8 @@ mod workspace;
 
 pub(crate) use body::INTACT;
 pub use body::{Body, BreakReason};
-pub use cone::{Cone, ConeLift, distances_plain};
+pub(crate) use cone::Press;
+pub use cone::{Cone, ConeLift, distances_plain, press_plain};
 pub use error::ChainMailError;
 pub use ids::{ElementId, LinkId, MaterialId};
 pub(crate) use lattice::SIDE_B as SIDE_B_BIT;

@@ -136,10 +136,9 @@ impl ForceGauge {
             // Measured again at the next grasp (materials may have changed meanwhile).
             self.patch = None;
         }
-        if inst.kind == InstrumentKind::Probe
-            && let Some(e) = tissue.probe_contact()
-        {
-            out.probe = tissue.force_on(&[e]);
+        if inst.kind == InstrumentKind::Probe && tissue.probe_contact().is_some() {
+            // The pull of the links leaving what the ball touches (its footprint on a surface).
+            out.probe = tissue.force_on_many(tissue.probe_patch(), &mut self.marks);
         }
         // The scalpel: energy over distance, both decaying with the same time constant.
         let energy = tissue.take_cut_energy();

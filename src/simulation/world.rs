@@ -304,6 +304,10 @@ impl World {
         // Relaxation within its budget.
         let t = Instant::now();
         c.relax_sweeps = self.tissue.relax(self.config.relax).sweeps;
+        // The probe's ball keeps what it presses under it (`tissue/press.rs`).
+        if self.instrument.kind == InstrumentKind::Probe {
+            c.moved_chain += self.tissue.hold_press();
+        }
         c.phase_us[3] = ms(t);
 
         // Contact between the layers.

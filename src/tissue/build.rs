@@ -617,7 +617,7 @@ impl Tissue {
             on_surface,
             forces: Default::default(),
             cut_energy: 0.0,
-            probe_contact: None,
+            probe: super::press::Probe::new(),
             repair: Default::default(),
         };
         tissue.forces = super::force::LinkFactors::of(&tissue);
@@ -629,6 +629,9 @@ impl Tissue {
         // and size a lift's cone (a step then touches only what moves).
         tissue.drift();
         tissue.jaws.cone.fit_body(&tissue.body);
+        if matches!(tissue.geometry, Geometry::Surface(_)) {
+            tissue.probe.cone.fit_body(&tissue.body);
+        }
         tissue
     }
 }

@@ -341,7 +341,7 @@ impl Tissue {
 
     /// The element the probe pressed on in the last [`Tissue::push`], if it touched the tissue.
     pub fn probe_contact(&self) -> Option<ElementId> {
-        self.probe_contact
+        self.probe.contact
     }
 }
 

@@ -22,6 +22,7 @@ mod grow;
 mod limits;
 mod link_grid;
 mod mesh;
+mod press;
 mod scan;
 mod settle;
 mod spec;
@@ -356,8 +357,8 @@ pub struct Tissue {
     pub(crate) forces: force::LinkFactors,
     /// Energy spent cutting since it was last taken, joules.
     pub(crate) cut_energy: f32,
-    /// The element the probe pressed on in the last push.
-    pub(crate) probe_contact: Option<ElementId>,
+    /// The probe: what it pressed at the last push, and its press's cone (`press.rs`).
+    pub(crate) probe: press::Probe,
     /// What the step moved, and the scratch of the repair that keeps the links within their limits
     /// (see `limits.rs`).
     pub(crate) repair: limits::Repair,
@@ -678,49 +679,6 @@ impl Tissue {
         self.jaws.blocked[slot] =
             (moved == 0 && fraction < 1.0).then(|| grasp::BlockedPull::new(e, p, t, &self.body, fraction));
         (moved, fraction)
-    }
-
-    /// The probe: a ball of `radius` at world point `tip` pushes the surface of the outermost layer
-    /// (layered) or the top of a volume where it meets it. Returns the elements moved.
-    pub fn push(&mut self, tip: [f32; 3], radius: f32) -> u32 {
-        let touched = self.probe_contact.take();
-        let moved = self.push_inner(tip, radius);
-        // What the probe pressed in and no longer touches settles back (`settle.rs`).
-        if let (Some(e), None) = (touched, self.probe_contact) {
-            self.settle_from([e]);
-        }
-        moved
-    }
-
-    fn push_inner(&mut self, tip: [f32; 3], radius: f32) -> u32 {
-        let Some(e) = self.nearest_element(tip, Some(0)) else { return 0 };
-        let Ok(p) = self.body.position(e) else { return 0 };
-        let t = self.geometry.to_lattice(tip, p[0]);
-        let (axis, pass) = match self.geometry {
-            Geometry::Surface(_) => (2, Pass::Normal),
-            Geometry::Volume => (1, Pass::All),
-        };
-        // In contact when the element lies inside the ball, measured across the surface.
-        let lateral = match self.geometry {
-            Geometry::Surface(_) => ((t[0] - p[0]).powi(2) + (t[1] - p[1]).powi(2)).sqrt(),
-            Geometry::Volume => ((t[0] - p[0]).powi(2) + (t[2] - p[2]).powi(2)).sqrt(),
-        };
-        // The ball touches the surface between elements too: the nearest element carries the push.
-        if lateral >= radius + self.spacing {
-            return 0;
-        }
-        let l = lateral.min(0.7 * radius);
-        let depth = (radius * radius - l * l).sqrt();
-        let limit = t[axis] - depth;
-        if p[axis] >= limit - 0.01 * self.spacing {
-            self.probe_contact = Some(e);
-        }
-        if p[axis] <= limit {
-            return 0;
-        }
-        let mut goal = p;
-        goal[axis] = limit;
-        self.displace(e, goal, pass).0
     }
 
     /// Relaxes the disturbed region within `budget`. The region is kept for the step's contact and

@@ -1,0 +1,350 @@
+//! The probe: a ball of the scene's `probe_radius` pressing the outermost layer (or the top of a
+//! volume) along the normal.
+//!
+//! On a surface of ChainMail the ball presses its whole footprint: every free element of the outer
+//! layer within the ball's radius of its centre, across the surface, goes down to the ball's lower
+//! surface above it (`R - sqrt(R² - l²)` above the ball's lowest point, `l` the element's distance
+//! across the surface from the centre), and the rest of the tissue to the highest heights at or below
+//! where it was that meet every bound along the normal. That is a cone of least distances from the
+//! footprint, as the forceps' lift is (`chainmail::ConeLift::pressing`, `docs/implicit-lift.md`): kept
+//! while the footprint stays the same, grown by the ring the press reaches, written a block at a
+//! time. The dent's size and depth, and the force (the pull of the links leaving the footprint), are
+//! then the same in metres at every element spacing, and a press costs about what a lift does.
+//!
+//! Until 2026-11-30 the ball pressed one element, the one nearest its centre, through the chain
+//! reaction: that element went below its neighbours by a shear limit each, so the nearest element
+//! changed from step to step and the dent's elements were moved one by one, every step (the probe
+//! pressing 2 mm into the meninges at 512 × 384 took 7.1 ms a step, 5.4 ms of it in the chain
+//! reaction), and the force was one element's links, which shrink with the spacing. A volume and a
+//! finite-element tissue still press the element nearest the centre (`Pass::All`).
+//!
+//! Finding the footprint touches only it: the element under the ball's centre is found by a walk
+//! across the outer layer from where the last one was (downhill in the distance across the surface),
+//! the footprint by a fill from there over the layer's links, whatever their state (a cut does not
+//! move the elements). The first contact of a tissue searches every surface element once.
+
+use crate::chainmail::{ElementId, Pass, Press};
+
+use super::{Geometry, Tissue};
+
+/// The footprint's offsets may drift this share of an element spacing from the cone's before the cone
+/// is started again: a thousandth (0.16 µm at 512 × 384), far below what a trainee sees.
+const DRIFT: f32 = 1e-3;
+
+/// The probe's state between steps.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Probe {
+    /// The element under the ball's centre at the last push that touched the tissue.
+    pub(crate) contact: Option<ElementId>,
+    /// The footprint's elements the ball touched at the last push (what its force is summed over),
+    /// and at the push before.
+    pub(crate) patch: Vec<ElementId>,
+    last: Vec<ElementId>,
+    /// Where the next walk to the ball's centre starts.
+    near: Option<ElementId>,
+    /// The press's cone.
+    pub(crate) cone: crate::chainmail::ConeLift,
+    /// Presses take the chain reaction's path, one element at a time (for tests that compare).
+    pub(crate) no_cone: bool,
+    /// Where the ball was and its radius at the last press that touched the tissue, to press again
+    /// after relaxation ([`Tissue::hold_press`]).
+    ball: Option<([f32; 3], f32)>,
+    /// The last press's footprint (ids and offsets above the ball's lowest point, `bottom`, in lattice
+    /// coordinates), and the fill's marks and queue (scratch).
+    seeds: Vec<u32>,
+    offs: Vec<f32>,
+    bottom: f32,
+    marks: Vec<u64>,
+    queue: Vec<u32>,
+}
+
+impl Probe {
+    /// A probe that has touched nothing yet.
+    pub(crate) fn new() -> Self {
+        Self { cone: crate::chainmail::ConeLift::pressing(), ..Self::default() }
+    }
+}
+
+impl Tissue {
+    /// The probe: a ball of `radius` at world point `tip` pushes the surface of the outermost layer
+    /// (layered) or the top of a volume where it meets it. Returns the elements moved.
+    pub fn push(&mut self, tip: [f32; 3], radius: f32) -> u32 {
+        let touched = self.probe.contact.take();
+        std::mem::swap(&mut self.probe.patch, &mut self.probe.last);
+        self.probe.patch.clear();
+        let moved = match self.geometry {
+            Geometry::Surface(_) if !self.is_fem() && !self.probe.no_cone => self.press(tip, radius, true),
+            _ => self.push_one(tip, radius),
+        };
+        // What the probe pressed in and no longer touches settles back (`settle.rs`).
+        if let (Some(e), None) = (touched, self.probe.contact) {
+            let last = std::mem::take(&mut self.probe.last);
+            self.settle_from(last.iter().copied().chain([e]));
+            self.probe.last = last;
+        }
+        moved
+    }
+
+    /// The elements the ball touched at the last push (empty when it touched nothing): the probe's
+    /// force is the pull of the links leaving them.
+    pub fn probe_patch(&self) -> &[ElementId] {
+        &self.probe.patch
+    }
+
+    /// After the step's relaxation: the ball presses again what relaxation raised into it (its
+    /// footprint's elements are free, and relaxation lifts a dent back toward rest), so that a step
+    /// leaves the tissue under the ball, as the forceps' jaws leave what they hold where they hold it.
+    /// Searches only through what moves, unless the press's cone is kept. Returns the elements moved.
+    pub fn hold_press(&mut self) -> u32 {
+        match self.probe.ball {
+            Some((tip, radius)) if self.probe.contact.is_some() => self.press(tip, radius, false),
+            _ => 0,
+        }
+    }
+
+    /// The ball presses its footprint by the cone (see the module); `whole`: see
+    /// `Body::press_by_cone`.
+    fn press(&mut self, tip: [f32; 3], radius: f32, whole: bool) -> u32 {
+        self.probe.ball = None;
+        let Some(layer) = self.layers.first() else { return 0 };
+        let (first, count) = (layer.first, layer.count);
+        let in_layer = |e: u32| e >= first && e - first < count;
+        let start = match self.probe.near.filter(|e| in_layer(e.0)) {
+            Some(e) => e,
+            None => match self.nearest_element(tip, Some(0)) {
+                Some(e) => e,
+                None => return 0,
+            },
+        };
+        let centre = self.walk_across(start, tip, first, count);
+        self.probe.near = Some(centre);
+        let Ok(c) = self.body.position(centre) else { return 0 };
+        let t = self.geometry.to_lattice(tip, c[0]);
+        // (The ball's centre in lattice coordinates taken near each element, so that a footprint
+        // across a wrapped surface's seam is whole.)
+        let geometry = self.geometry;
+        let across = |p: [f32; 3]| {
+            let t = geometry.to_lattice(tip, p[0]);
+            ((t[0] - p[0]).powi(2) + (t[1] - p[1]).powi(2)).sqrt()
+        };
+        if across(c) >= radius + self.spacing {
+            return 0;
+        }
+        // The footprint: a fill over the layer's links from the centre, within the radius.
+        let n = self.body.element_count();
+        let Probe { seeds, offs, marks, queue, bottom: ball_bottom, .. } = &mut self.probe;
+        seeds.clear();
+        offs.clear();
+        queue.clear();
+        marks.resize(n.div_ceil(64), 0);
+        let pos = self.body.positions();
+        let lattice = self.body.lattice();
+        let mark = |marks: &mut Vec<u64>, e: u32| {
+            let (w, b) = (e as usize / 64, 1u64 << (e % 64));
+            let fresh = marks.get(w).is_some_and(|x| x & b == 0);
+            if let Some(x) = marks.get_mut(w) {
+                *x |= b;
+            }
+            fresh
+        };
+        mark(marks, centre.0);
+        queue.push(centre.0);
+        let mut next = 0;
+        let mut touching = false;
+        // The ball's lowest point; each element's goal lies `R - sqrt(R² - l²)` above it.
+        let bottom = t[2] - radius;
+        *ball_bottom = bottom;
+        while let Some(&e) = queue.get(next) {
+            next += 1;
+            let Some(&p) = pos.get(e as usize) else { continue };
+            let l = across(p);
+            // (The centre is kept whatever its distance: the ball may touch between elements.)
+            let l = if e == centre.0 { l.min(0.7 * radius) } else { l };
+            if l >= radius {
+                continue;
+            }
+            let off = radius - (radius * radius - l * l).sqrt();
+            if !(self.body.is_pinned(ElementId(e)) || self.body.is_held(ElementId(e))) {
+                seeds.push(e);
+                offs.push(off);
+                touching |= p[2] >= bottom + off - 0.01 * self.spacing;
+            }
+            for (m, _) in lattice.neighbours(ElementId(e)) {
+                if in_layer(m.0) && mark(marks, m.0) {
+                    queue.push(m.0);
+                }
+            }
+        }
+        for &e in queue.iter() {
+            if let Some(x) = marks.get_mut(e as usize / 64) {
+                *x = 0;
+            }
+        }
+        if !touching {
+            return 0;
+        }
+        let tolerance = DRIFT * self.spacing;
+        let (seeds, offs) = (std::mem::take(&mut self.probe.seeds), std::mem::take(&mut self.probe.offs));
+        let ball = Press { seeds: &seeds, offs: &offs, goal: bottom, tolerance, whole };
+        let moved = self.body.press_by_cone(&mut self.ws, &mut self.probe.cone, &ball);
+        if moved.is_some_and(|m| m > 0) {
+            self.activate_moved();
+        }
+        // In contact: the footprint's elements now on the ball's surface (within a hundredth of a
+        // spacing).
+        self.probe.contact = Some(centre);
+        self.probe.ball = Some((tip, radius));
+        self.probe.patch.clear();
+        let pos = self.body.positions();
+        for (&e, &o) in seeds.iter().zip(&offs) {
+            if pos.get(e as usize).is_some_and(|p| p[2] >= bottom + o - 0.01 * self.spacing) {
+                self.probe.patch.push(ElementId(e));
+            }
+        }
+        self.probe.seeds = seeds;
+        self.probe.offs = offs;
+        moved.unwrap_or(0)
+    }
+
+    /// From `start`, the element of the layer `first .. first + count` nearest the point `tip` across
+    /// the surface: each step goes to the neighbour (along any of the layer's links) nearest it, until
+    /// none is nearer.
+    fn walk_across(&self, start: ElementId, tip: [f32; 3], first: u32, count: u32) -> ElementId {
+        let pos = self.body.positions();
+        let lattice = self.body.lattice();
+        let across = |e: ElementId| {
+            pos.get(e.index()).map_or(f32::INFINITY, |&p| {
+                let t = self.geometry.to_lattice(tip, p[0]);
+                (t[0] - p[0]).powi(2) + (t[1] - p[1]).powi(2)
+            })
+        };
+        let (mut at, mut d) = (start, across(start));
+        // (Each step is strictly nearer: the walk ends, at most once through the layer.)
+        for _ in 0..count {
+            let best = lattice
+                .neighbours(at)
+                .filter(|(m, _)| m.0 >= first && m.0 - first < count)
+                .map(|(m, _)| (across(m), m))
+                .fold(None, |b: Option<(f32, ElementId)>, x| match b {
+                    Some(b) if b.0 <= x.0 => Some(b),
+                    _ => Some(x),
+                });
+            match best {
+                Some((dm, m)) if dm < d => (at, d) = (m, dm),
+                _ => break,
+            }
+        }
+        at
+    }
+
+    /// A ball pressing the one element nearest its centre by the chain reaction (a volume, a
+    /// finite-element tissue, and tests comparing with the cone).
+    fn push_one(&mut self, tip: [f32; 3], radius: f32) -> u32 {
+        let Some(e) = self.nearest_element(tip, Some(0)) else { return 0 };
+        let Ok(p) = self.body.position(e) else { return 0 };
+        let t = self.geometry.to_lattice(tip, p[0]);
+        let (axis, pass) = match self.geometry {
+            Geometry::Surface(_) => (2, Pass::Normal),
+            Geometry::Volume => (1, Pass::All),
+        };
+        // In contact when the element lies inside the ball, measured across the surface.
+        let lateral = match self.geometry {
+            Geometry::Surface(_) => ((t[0] - p[0]).powi(2) + (t[1] - p[1]).powi(2)).sqrt(),
+            Geometry::Volume => ((t[0] - p[0]).powi(2) + (t[2] - p[2]).powi(2)).sqrt(),
+        };
+        // The ball touches the surface between elements too: the nearest element carries the push.
+        if lateral >= radius + self.spacing {
+            return 0;
+        }
+        let l = lateral.min(0.7 * radius);
+        let depth = (radius * radius - l * l).sqrt();
+        let limit = t[axis] - depth;
+        if p[axis] >= limit - 0.01 * self.spacing {
+            self.probe.contact = Some(e);
+            self.probe.patch.clear();
+            self.probe.patch.push(e);
+        }
+        if p[axis] <= limit {
+            return 0;
+        }
+        let mut goal = p;
+        goal[axis] = limit;
+        self.displace(e, goal, pass).0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::chainmail::{ElementId, RelaxBudget, press_plain};
+    use crate::tissue::Tissue;
+
+    fn meninges(res: [u32; 2]) -> Tissue {
+        let mut scene =
+            crate::scene::Scene::from_str(include_str!("../../scenes/meninges.ron"), "meninges.ron")
+                .expect("scene");
+        if let crate::scene::Tissue::Layers(l) = &mut scene.tissue {
+            l.resolution = res;
+        }
+        scene.build_world(false).expect("world").tissue().clone()
+    }
+
+    /// The positions after a press against the plain reference from `before`, to 0.1 µm; counts the
+    /// presses that touched and those whose search went only through what moved.
+    fn check(
+        t: &Tissue,
+        before: &crate::chainmail::Body,
+        step: usize,
+        pressed: &mut usize,
+        searched: &mut usize,
+    ) {
+        if t.probe.contact.is_none() {
+            return;
+        }
+        *pressed += 1;
+        *searched += usize::from(!t.probe.cone.is_complete());
+        let seeds: Vec<(ElementId, f32)> = t
+            .probe
+            .seeds
+            .iter()
+            .zip(&t.probe.offs)
+            .map(|(&e, &o)| (ElementId(e), t.probe.bottom + o))
+            .collect();
+        let want = press_plain(before, &seeds);
+        for (j, (p, w)) in t.body().positions().iter().zip(&want).enumerate() {
+            assert!((p[2] - w).abs() <= 1e-7, "step {step}: element {j} at {} against {w}", p[2]);
+        }
+    }
+
+    /// Every press by the cone leaves every element where the plain reference puts it (each footprint
+    /// element at or under the ball, every bound along the normal pushing down what it must, swept
+    /// until nothing falls), to a tenth of a micrometre: pressing in (the cone kept and grown), held
+    /// still (started again, then kept), sliding across by a third of a spacing a step (searched
+    /// through what moves), and lifted away; each step's press, and its press again after the step's
+    /// relaxation ([`Tissue::hold_press`]).
+    #[test]
+    fn a_press_is_the_plain_press() {
+        let mut t = meninges([48, 36]);
+        let r = 0.003;
+        let h = 0.003 + r; // the ball resting on the dura
+        let (mut pressed, mut searched) = (0, 0);
+        for step in 0..140 {
+            let (u, depth) = match step {
+                0..40 => (0.5, 0.0015 * step as f32 / 40.0),
+                40..60 => (0.5, 0.0015),
+                60..120 => (0.5 + (step - 60) as f32 * t.spacing / 3.0 / 0.08, 0.0015),
+                _ => (0.6, 0.0015 - 0.0001 * (step - 120) as f32),
+            };
+            let tip = t.surface_point(u, 0.5, h - depth);
+            // The step's press, then the press again after its relaxation.
+            let before = t.body().clone();
+            t.push(tip, r);
+            check(&t, &before, step, &mut pressed, &mut searched);
+            t.relax(RelaxBudget::sweeps(4));
+            let before = t.body().clone();
+            t.hold_press();
+            check(&t, &before, step, &mut pressed, &mut searched);
+            t.end_step();
+        }
+        assert!(pressed > 200 && searched > 60, "{pressed} presses, {searched} searched through what moves");
+    }
+}
