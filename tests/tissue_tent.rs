@@ -228,8 +228,8 @@ fn probe_dent(nu: u32, nv: u32) -> (Vec<f32>, [f32; 3]) {
 /// (relaxation does not lift it back into the ball), and the dura's height 2, 4 and 6 mm out differs
 /// by under 5 % of the press between 64 x 48, 128 x 96 and 256 x 192, as does its edge 8 to 12 mm out
 /// (nothing there). Measured 2026-11-30: -1.50, -1.04 / -1.09 / -1.09, -0.54 / -0.59 / -0.59 and
-/// -0.10 / -0.11 / -0.09 mm. (Until then the ball pressed the one element nearest its centre: the dent
-/// was 0.79, 1.13 and 1.24 mm deep after the step's relaxation, and its force one element's links.)
+/// -0.12 / -0.09 / -0.09 mm. (Pressed the same way but not held through the step's relaxation, the
+/// centre came out 0.79, 1.13 and 1.24 mm down: relaxation lifts a dent faster on a coarser sheet.)
 /// The force on the probe pushes it back up, across the surface by under a thousandth of that.
 #[test]
 fn a_probe_dent_is_the_same_at_every_resolution() {

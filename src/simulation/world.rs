@@ -303,11 +303,14 @@ impl World {
 
         // Relaxation within its budget.
         let t = Instant::now();
-        c.relax_sweeps = self.tissue.relax(self.config.relax).sweeps;
-        // The probe's ball keeps what it presses under it (`tissue/press.rs`).
-        if self.instrument.kind == InstrumentKind::Probe {
-            c.moved_chain += self.tissue.hold_press();
-        }
+        // (The probe's ball keeps what it presses under it: `tissue/press.rs`.)
+        c.relax_sweeps = if self.instrument.kind == InstrumentKind::Probe {
+            let (report, moved) = self.tissue.relax_under_probe(self.config.relax);
+            c.moved_chain += moved;
+            report.sweeps
+        } else {
+            self.tissue.relax(self.config.relax).sweeps
+        };
         c.phase_us[3] = ms(t);
 
         // Contact between the layers.

@@ -23,7 +23,7 @@
 //! the footprint by a fill from there over the layer's links, whatever their state (a cut does not
 //! move the elements). The first contact of a tissue searches every surface element once.
 
-use crate::chainmail::{ElementId, Pass, Press};
+use crate::chainmail::{ElementId, Pass, Press, RelaxBudget, RelaxReport};
 
 use super::{Geometry, Tissue};
 
@@ -91,10 +91,30 @@ impl Tissue {
         &self.probe.patch
     }
 
+    /// The step's relaxation while the probe is in hand: what the ball touches is held where it is
+    /// (relaxation would lift a dent back toward rest, into the ball), and the ball then presses again
+    /// whatever else of its footprint relaxation raised into it ([`Tissue::hold_press`]), so that a
+    /// step leaves the tissue under the ball, as the forceps' jaws leave what they hold where they
+    /// hold it. Held, the touched elements let the region round the dent settle, as round a lift.
+    /// Returns the relaxation's report and the elements the second press moved.
+    pub fn relax_under_probe(&mut self, budget: RelaxBudget) -> (RelaxReport, u32) {
+        // (Held for the relaxation only, without a new revision: the sweeps read the flags as they
+        // are, and the holds are gone before anything else looks; the patch holds free elements.)
+        let patch = std::mem::take(&mut self.probe.patch);
+        for &e in &patch {
+            self.body.set_held_for_pull(e, true);
+        }
+        let report = self.relax(budget);
+        for &e in &patch {
+            self.body.set_held_for_pull(e, false);
+        }
+        self.probe.patch = patch;
+        (report, self.hold_press())
+    }
+
     /// After the step's relaxation: the ball presses again what relaxation raised into it (its
-    /// footprint's elements are free, and relaxation lifts a dent back toward rest), so that a step
-    /// leaves the tissue under the ball, as the forceps' jaws leave what they hold where they hold it.
-    /// Searches only through what moves, unless the press's cone is kept. Returns the elements moved.
+    /// footprint's free elements). Searches only through what moves, unless the press's cone is kept.
+    /// Returns the elements moved.
     pub fn hold_press(&mut self) -> u32 {
         match self.probe.ball {
             Some((tip, radius)) if self.probe.contact.is_some() => self.press(tip, radius, false),
@@ -339,10 +359,21 @@ mod tests {
             let before = t.body().clone();
             t.push(tip, r);
             check(&t, &before, step, &mut pressed, &mut searched);
+            // (Relaxation as the step runs it, what the ball touches held, then the press again.)
+            let patch = t.probe.patch.clone();
+            for &e in &patch {
+                t.body.set_held_for_pull(e, true);
+            }
             t.relax(RelaxBudget::sweeps(4));
+            for &e in &patch {
+                t.body.set_held_for_pull(e, false);
+            }
             let before = t.body().clone();
             t.hold_press();
             check(&t, &before, step, &mut pressed, &mut searched);
+            for &e in &patch {
+                assert!(!t.body().is_held(e), "step {step}: the ball's hold outlived the relaxation");
+            }
             t.end_step();
         }
         assert!(pressed > 200 && searched > 60, "{pressed} presses, {searched} searched through what moves");
