@@ -43,7 +43,7 @@
 //! | `stencil` | what the fast paths know of a grid body: neighbour offsets, regular elements, row boxes |
 //! | `workspace` | the loops' scratch, the stencil of the body it serves, the SIMD level |
 //! | `reaction/` | the chain reaction: API and one-by-one loop (`mod`), shared arrays and checks (`arrays`), runs across rows (`runs`) in portable (`chunk`) or AVX-512 (`avx512`) chunks |
-//! | `cone` | a lift's cone: the least distances along the normal from held elements over the bounds, and the lift of the forceps' jaws by it (`docs/implicit-lift.md`) |
+//! | `cone` | a lift's cone: the least distances along the normal from held elements over the bounds, and the lift of the forceps' jaws by it (`docs/implicit-lift.md`); the same cone the other way up for the probe's press, and the press's plain reference |
 //! | `relax/` | relaxation: API and generic sweeps (`mod`), the plain kernel (`kernel`), the grid SIMD kernel (`grid`), the split into bands (`bands`) |
 
 mod body;
