@@ -316,6 +316,7 @@ mod tests {
         step: usize,
         pressed: &mut usize,
         searched: &mut usize,
+        blocks: &mut usize,
     ) {
         if t.probe.contact.is_none() {
             return;
@@ -330,35 +331,55 @@ mod tests {
             .map(|(&e, &o)| (ElementId(e), t.probe.bottom + o))
             .collect();
         let want = press_plain(before, &seeds);
-        for (j, (p, w)) in t.body().positions().iter().zip(&want).enumerate() {
-            assert!((p[2] - w).abs() <= 1e-7, "step {step}: element {j} at {} against {w}", p[2]);
+        let (pos, was) = (t.body().positions(), before.positions());
+        // Pinned elements never move; where the reference (which takes them as free) would move one,
+        // the press stops short of it, above the reference everywhere.
+        let pinned = |j: usize| t.body().is_pinned(ElementId(j as u32));
+        let blocked = (0..pos.len()).any(|j| pinned(j) && want[j] < was[j][2] - 1e-9);
+        for (j, (p, w)) in pos.iter().zip(&want).enumerate() {
+            if pinned(j) {
+                assert_eq!(p[2], was[j][2], "step {step}: pinned element {j} moved");
+            } else if blocked {
+                assert!(
+                    p[2] >= w - 1e-7 && p[2] <= was[j][2],
+                    "step {step}: element {j} at {} (reference {w})",
+                    p[2]
+                );
+            } else {
+                assert!((p[2] - w).abs() <= 1e-7, "step {step}: element {j} at {} against {w}", p[2]);
+            }
         }
+        *blocks += usize::from(blocked);
     }
 
     /// Every press by the cone leaves every element where the plain reference puts it (each footprint
     /// element at or under the ball, every bound along the normal pushing down what it must, swept
     /// until nothing falls), to a tenth of a micrometre: pressing in (the cone kept and grown), held
     /// still (started again, then kept), sliding across by a third of a spacing a step (searched
-    /// through what moves), and lifted away; each step's press, and its press again after the step's
-    /// relaxation ([`Tissue::hold_press`]).
+    /// through what moves, by its queue and by the heap), lifted away, then 4 mm deep and sliding back
+    /// (stopped short of the pins: there every element at or above the reference, and no pin moved);
+    /// each step's press, and its press again after the step's relaxation ([`Tissue::hold_press`]).
     #[test]
     fn a_press_is_the_plain_press() {
         let mut t = meninges([48, 36]);
         let r = 0.003;
         let h = 0.003 + r; // the ball resting on the dura
-        let (mut pressed, mut searched) = (0, 0);
-        for step in 0..140 {
+        let (mut pressed, mut searched, mut blocks) = (0, 0, 0);
+        for step in 0..170 {
             let (u, depth) = match step {
                 0..40 => (0.5, 0.0015 * step as f32 / 40.0),
                 40..60 => (0.5, 0.0015),
                 60..120 => (0.5 + (step - 60) as f32 * t.spacing / 3.0 / 0.08, 0.0015),
-                _ => (0.6, 0.0015 - 0.0001 * (step - 120) as f32),
+                120..140 => (0.6, 0.0015 - 0.0001 * (step - 120) as f32),
+                // Deep and sliding back: elements reached closer again and again, the search
+                // going on by the heap.
+                _ => (0.6 - (step - 140) as f32 * t.spacing / 0.08, 0.004),
             };
             let tip = t.surface_point(u, 0.5, h - depth);
             // The step's press, then the press again after its relaxation.
             let before = t.body().clone();
             t.push(tip, r);
-            check(&t, &before, step, &mut pressed, &mut searched);
+            check(&t, &before, step, &mut pressed, &mut searched, &mut blocks);
             // (Relaxation as the step runs it, what the ball touches held, then the press again.)
             let patch = t.probe.patch.clone();
             for &e in &patch {
@@ -370,12 +391,18 @@ mod tests {
             }
             let before = t.body().clone();
             t.hold_press();
-            check(&t, &before, step, &mut pressed, &mut searched);
+            check(&t, &before, step, &mut pressed, &mut searched, &mut blocks);
             for &e in &patch {
                 assert!(!t.body().is_held(e), "step {step}: the ball's hold outlived the relaxation");
             }
             t.end_step();
         }
         assert!(pressed > 200 && searched > 60, "{pressed} presses, {searched} searched through what moves");
+        let by_heap = t.probe.cone.cone().by_heap_searches;
+        assert!(
+            by_heap > 0 && (by_heap as usize) < searched,
+            "{by_heap} of {searched} searches went on by the heap"
+        );
+        assert!(blocks > 0, "no press stopped short of a pin");
     }
 }
