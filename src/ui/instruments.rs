@@ -63,6 +63,8 @@ impl View for InstrumentBar {
                 (InstrumentKind::Forceps, true, _) => "holding tissue",
                 (InstrumentKind::Forceps, false, _) if inst.grasped.is_some() => "holding",
                 (InstrumentKind::Scalpel, _, true) => "cutting",
+                // (The force panel's figure: the probe feels the tissue only while it presses it.)
+                (InstrumentKind::Probe, _, _) if frame.world.forces().probe != [0.0; 3] => "pressing",
                 (_, true, _) => "forceps clamped",
                 _ => "free",
             };
