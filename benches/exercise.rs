@@ -1,7 +1,8 @@
 //! The exercises themselves, at a given resolution, played with their careful scripts step by step, as
 //! a trainee's session runs them: `exercise/meninges_careful/...` (the meninges scene, the layers
-//! lifted and the fibres cut under them) and `exercise/durotomy_careful/...` (the default exercise:
-//! a U-shaped flap cut in the dura, reflected, the arachnoid freed under it).
+//! lifted and the fibres cut under them), `exercise/meninges_probe/...` (the same scene, the probe
+//! pressing the dura, held, slid across and held) and `exercise/durotomy_careful/...` (the default
+//! exercise: a U-shaped flap cut in the dura, reflected, the arachnoid freed under it).
 //!
 //! Criterion reports the mean step; p50 and p99 of the steps timed are printed after each bench
 //! (a step's cost depends on where in the script it falls, so the tail matters as much as the mean),
@@ -21,6 +22,7 @@ use dissect::simulation::World;
 
 const MENINGES: &str = include_str!("../scenes/meninges.ron");
 const CAREFUL: &str = include_str!("../scenes/scripts/meninges_careful.ron");
+const PROBE: &str = include_str!("../scenes/scripts/meninges_probe.ron");
 const DUROTOMY: &str = include_str!("../scenes/durotomy.ron");
 const DUROTOMY_CAREFUL: &str = include_str!("../scenes/scripts/durotomy_careful.ron");
 
@@ -67,6 +69,8 @@ fn exercise_benches(c: &mut Criterion) {
     let _pool = dissect::chainmail::worker_pool("bench").ok();
     let meninges = Script::from_str(CAREFUL, "meninges_careful.ron").expect("careful script");
     exercise(c, "meninges_careful", MENINGES, &meninges, &[(128, 96), (256, 192), (512, 384)]);
+    let probe = Script::from_str(PROBE, "meninges_probe.ron").expect("probe script");
+    exercise(c, "meninges_probe", MENINGES, &probe, &[(128, 96), (256, 192), (512, 384)]);
     let durotomy = Script::from_str(DUROTOMY_CAREFUL, "durotomy_careful.ron").expect("careful script");
     exercise(c, "durotomy_careful", DUROTOMY, &durotomy, &[(64, 48), (128, 96), (256, 192)]);
 }
