@@ -707,11 +707,11 @@ impl Body {
         } else {
             kept.extend_from_slice(offs);
         }
-        // A ball pressing where it pressed last keeps its cone (grown by the ring each press reaches,
-        // written a block at a time); the first press of a footprint after a different one starts a
-        // whole cone. A ball sliding across the tissue (a new footprint every step or two) instead
-        // searches from the footprint only through what moves: the tissue was within every bound, so
-        // an element that need not move bounds nothing behind it that it did not bound before.
+        // A new footprint (a ball sliding across the tissue: one every step or two) is searched from
+        // only through what moves: the tissue was within every bound, so an element that need not
+        // move bounds nothing behind it that it did not bound before. The same footprint pressed
+        // again (with `whole`) starts a whole cone, and a ball pressing where it pressed last keeps
+        // it (grown by the ring each press reaches, written a block at a time).
         let restart = !(same && press.complete);
         if restart {
             press.key = None;
