@@ -138,3 +138,17 @@ fn a_clamped_drag_keeps_its_limits_while_the_probe_is_used() {
         panic!("{e}");
     }
 }
+
+/// Found by `no_intact_link_leaves_its_limits` (2026-11-30): the probe swept fast across the dura and
+/// pressed deep at the end.
+#[test]
+fn a_fast_deep_probe_keeps_the_limits() {
+    let acts = [
+        (Act::Do(Command::Select(InstrumentKind::Probe)), 1),
+        (Act::To(0.7180723, 0.4057592, 0.0056760623), 1),
+        (Act::To(0.048078205, 0.500874, 0.0019941654), 6),
+        (Act::To(0.5370484, 0.77836984, 0.00012209266), 14),
+    ];
+    let played = play(&acts);
+    assert!(played.is_ok(), "{}", played.err().unwrap_or_default());
+}

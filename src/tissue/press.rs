@@ -46,6 +46,8 @@ pub(crate) struct Probe {
     pub(crate) cone: crate::chainmail::ConeLift,
     /// Presses take the chain reaction's path, one element at a time (for tests that compare).
     pub(crate) no_cone: bool,
+    /// What the ball touches is held for this step's relaxation (`Tissue::relax_under_probe`).
+    pub(crate) holding: bool,
     /// Where the ball was and its radius at the last press that touched the tissue, to press again
     /// after relaxation ([`Tissue::hold_press`]).
     ball: Option<([f32; 3], f32)>,
@@ -104,7 +106,9 @@ impl Tissue {
         for &e in &patch {
             self.body.set_held_for_pull(e, true);
         }
+        self.probe.holding = !patch.is_empty();
         let report = self.relax(budget);
+        self.probe.holding = false;
         for &e in &patch {
             self.body.set_held_for_pull(e, false);
         }

@@ -53,7 +53,9 @@ impl Tissue {
         // against the clamp, cannot bring back (`tests/tissue_limits.rs`,
         // `a_clamped_drag_keeps_its_limits_while_the_probe_is_used`). The sweeps, which keep every
         // link within its box, bring such tissue back alone.
-        let correcting = self.settling && self.jaws.held.is_empty();
+        // (Nor while the probe's ball holds what it touches: `press.rs`; found by
+        // `tests/tissue_limits.rs`, `a_fast_deep_probe_keeps_the_limits`.)
+        let correcting = self.settling && self.jaws.held.is_empty() && !self.probe.holding;
         let updates = if correcting && !self.filling() { updates / 2 } else { updates };
         if correcting && self.coarse.placing() {
             // The correction is placing the region's elements: sweeps now would be undone when the
