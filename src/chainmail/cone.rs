@@ -262,17 +262,11 @@ impl Cone {
                 continue; // a stale entry: `u` was reached closer since
             }
             settled.push(u as u32);
-            let ru = match (rest, DOWN) {
-                (false, _) => 0.0,
-                (true, false) => rest_pos[u][2],
-                (true, true) => sign * rest_pos[u][2],
-            };
+            // (`sign` is a constant: a lift's product by 1 is the height itself.)
+            let ru = if rest { sign * rest_pos[u][2] } else { 0.0 };
             let mut relax = |y: u32, hi: f32| {
                 let wt = if rest {
-                    let Some(ry) = rest_pos.get(y as usize).map(|p| if DOWN { sign * p[2] } else { p[2] })
-                    else {
-                        return;
-                    };
+                    let Some(ry) = rest_pos.get(y as usize).map(|p| sign * p[2]) else { return };
                     if !hi.is_finite() {
                         return;
                     }

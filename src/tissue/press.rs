@@ -13,9 +13,10 @@
 //!
 //! Until 2026-11-30 the ball pressed one element, the one nearest its centre, through the chain
 //! reaction: that element went below its neighbours by a shear limit each, so the nearest element
-//! changed from step to step and the dent's elements were moved one by one, every step (the probe
-//! pressing 2 mm into the meninges at 512 × 384 took 7.1 ms a step, 5.4 ms of it in the chain
-//! reaction), and the force was one element's links, which shrink with the spacing. A volume and a
+//! changed from step to step and the dent's elements were moved one by one, every step (a session
+//! pressing 1.5 mm into the meninges' dura and sliding took 0.9 ms a step at 512 × 384, a search of
+//! every element 0.65 ms of it; pressed 6 mm in, 7.1 to 8.0 ms), and the force was one element's
+//! links, which shrink with the spacing. A volume and a
 //! finite-element tissue still press the element nearest the centre (`Pass::All`).
 //!
 //! Finding the footprint touches only it: the element under the ball's centre is found by a walk
