@@ -117,10 +117,24 @@ enum Command {
         /// ChainMail's relative limits: stretch, compress, shear.
         #[arg(long, value_name = "S,C,SH", value_delimiter = ',', default_values_t = [1.2, 0.7, 0.3])]
         limits: Vec<f32>,
+        /// What ChainMail's relaxation lowers: `cells`, the linear-elastic energy of each lattice cell
+        /// with the FEM material's Poisson's ratio; `links`, each link a spring on its offset
+        /// (Gibson's relaxation, no Poisson effect).
+        #[arg(long, value_name = "ENERGY", default_value = "cells")]
+        energy: Energy,
         /// Also write the report as JSON.
         #[arg(long, value_name = "FILE")]
         json: Option<PathBuf>,
     },
+}
+
+/// What the compared ChainMail's relaxation lowers.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum Energy {
+    /// The linear-elastic energy of each lattice cell, with the FEM material's Poisson's ratio.
+    Cells,
+    /// Each link a spring on its offset (Gibson's relaxation).
+    Links,
 }
 
 fn main() -> ExitCode {
@@ -162,17 +176,26 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             }
             open_app(None, window, dissect::app::Source::Replay(file))
         }
-        Some(Command::Compare { nodes, grasp_radius, limits, json }) => {
+        Some(Command::Compare { nodes, grasp_radius, limits, energy, json }) => {
             let n = usize::from(nodes);
             let &[stretch, compress, shear] = limits.as_slice() else {
                 eprintln!("dissect compare: --limits takes three numbers: stretch,compress,shear");
                 return Ok(ExitCode::FAILURE);
             };
+            let base = dissect::fem::CompareConfig::default();
+            let poisson_ratio = match energy {
+                Energy::Cells => Some(base.material.poisson as f32),
+                Energy::Links => None,
+            };
             let cfg = dissect::fem::CompareConfig {
                 dims: [n; 3],
                 grasp_radius,
-                chainmail: dissect::chainmail::Material::relative(stretch, compress, shear),
-                ..Default::default()
+                chainmail: dissect::chainmail::Material {
+                    poisson_ratio,
+                    young_modulus: base.material.young as f32,
+                    ..dissect::chainmail::Material::relative(stretch, compress, shear)
+                },
+                ..base
             };
             if let Some(path) = &json
                 && let Err(e) = writable_file(path)

@@ -164,6 +164,20 @@ fn fem_parameters() {
 }
 
 #[test]
+fn poisson_ratio_belongs_to_volumes() {
+    // A layer has no cells to relax: its material's Poisson's ratio is refused where it is written.
+    let e = load("stiffness: 1.0)", "stiffness: 1.0, poisson_ratio: 0.45)");
+    expect(e, "8:128", &["poisson_ratio is Some(0.45), expected None", "a layer has none"]);
+    // A volume's must lie in (-1, 0.5).
+    let src =
+        "Scene(title: \"V\", tissue: Volume((size: (0.04, 0.04, 0.04),\n  material: (poisson_ratio: 0.5))))";
+    let e = Scene::from_str(src, "bad.ron").expect_err("Poisson 0.5");
+    expect(e, "2:29", &["tissue.material.poisson_ratio is 0.5", "(-1, 0.5)"]);
+    let ok = src.replace("0.5)", "0.45)");
+    Scene::from_str(&ok, "ok.ron").unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
 fn wrapped_axis_has_no_edge() {
     let src = "Scene(title: \"C\", tissue: Layers((surface: Cylinder(radius: 0.01, length: 0.05),\n  layers: [(name: \"w\")], pinned: Edges([VMin, UMax]))))";
     let e = Scene::from_str(src, "bad.ron").expect_err("UMax on a cylinder");

@@ -85,6 +85,11 @@ pub struct Body {
     pub(crate) shifts: u64,
     /// Elements whose normal offset is bounded without a link between them (see `pairs.rs`).
     pub(crate) pairs: super::pairs::Pairs,
+    /// The elastic cells of a volume whose material has a Poisson's ratio (`relax/elastic.rs`).
+    pub(crate) elastic: super::relax::Elastic,
+    /// How many links have broken (links never mend): with `boxes_epoch`, what the elastic cells
+    /// depend on.
+    pub(crate) broken: u64,
 }
 
 /// A number no earlier call returned (for [`Body::shape`] and [`Body::revision`]).
@@ -160,6 +165,8 @@ impl Body {
             motion: 0,
             shifts: 0,
             pairs: Default::default(),
+            elastic: Default::default(),
+            broken: 0,
         };
         for l in 0..m {
             body.update_link_box(l);
@@ -506,6 +513,7 @@ impl Body {
             return Ok(false);
         }
         self.link_state[i] = reason as u8;
+        self.broken += 1;
         self.touch();
         for s in self.slots_of(i) {
             self.set_slot_class(s, 0);

@@ -4,26 +4,33 @@
 //! ChainMail against the FEM (RMS over the free surface nodes of `|u_cm − u_fem|`, divided by the
 //! imposed displacement's magnitude) and the time per step of each.
 //!
-//! ChainMail parameters (defaults of [`CompareConfig`]): relative limits stretch 1.2, compress 0.7,
-//! shear 0.3 (compress 0.7 rather than the engine's 0.8 so that the large push, 20 % of the height on
-//! one column of links, is reachable without a pinned element blocking it), relaxation stiffness 1,
-//! relaxation over the whole body until no element moves more than `1e-6 ×` the imposed displacement
-//! in a sweep (at most 20 000 sweeps). A *ChainMail step* for timing is one deformation plus 10
+//! ChainMail parameters (defaults of [`CompareConfig`], [`chainmail_material`]): relative limits
+//! stretch 1.2, compress 0.7, shear 0.3 (compress 0.7 rather than the engine's 0.8 so that the large
+//! push, 20 % of the height on one column of links, is reachable without a pinned element blocking it);
+//! relaxation of elastic cells with the FEM material's modulus and Poisson's ratio
+//! ([`Material::poisson_ratio`]: each lattice cell cut into the FEM's six tetrahedra, relaxed by
+//! projected Gauss-Seidel within the limits), over the whole body until no element moves more than
+//! `1e-6 ×` the imposed displacement in a sweep (nor less than two f32 spacings across the block; at
+//! most 20 000 sweeps). `poisson_ratio: None` compares Gibson's relaxation of the links' springs
+//! instead (`dissect compare --energy links`). A *ChainMail step* for timing is one deformation plus 10
 //! relaxation sweeps. An *FEM step* is one [`FemModel::impose`] (a 3 × 3 solve and the selective
-//! multiplication). Relaxation converges to the discrete harmonic field of the lattice whatever the
-//! limits, so the relaxed error measures the graph-Laplacian model against linear elasticity; the
-//! unrelaxed and 10-sweep errors show what the limits give before that.
+//! multiplication). Elastic cells relax to the FEM's own answer where the limits do not bind, so the
+//! relaxed error measures what the limits change; the links' springs relax to the lattice's discrete
+//! harmonic field, which is not linear elasticity (no Poisson effect), so theirs measures the model too.
 //!
 //! The force on the grasped patch (the top nodes within [`CompareConfig::grasp_radius`]) is the FEM's
-//! reaction against ChainMail's springs, each link `c·A/L` on the change of its offset with
-//! `c` = [`ElasticMaterial::lattice_modulus`] (no constant fitted), and the pull of the same springs
-//! on the pinned base.
+//! reaction against ChainMail's: with elastic cells, `K u` summed over the patch
+//! ([`Body::elastic_force`]); with the links' springs, each link `c·A/L` on the change of its offset
+//! with `c` = [`ElasticMaterial::lattice_modulus`] (no constant fitted). The base's is the same sum
+//! over the pinned base.
 //!
 //! Measured on block_16 (release, 2-core box, E = 3 kPa, ν = 0.45, spacing 5 mm, 5 nodes grasped,
-//! 2026-11-24): FEM load 2.8 to 5 s, 165 MiB dense; relaxed ChainMail RMS error 0.133 (2 %) and 0.281
-//! (20 %), unrelaxed 0.141 and 0.152; force 0.0805 N against the FEM's 0.0759 N at 2 % (7 %), 0.240 N
-//! against 0.759 N at 20 % (the links' limits carry the rest to the base: 1.44 N); ChainMail step
-//! (deform + 10 sweeps) ≈ 0.5 to 0.6 ms, FEM step ≈ 10 µs.
+//! 2026-11-30). Elastic cells: relaxed RMS error 0.007 (2 %) and 0.184 (20 %), 10 sweeps 0.134 and
+//! 0.146; force 0.0759 N against the FEM's 0.0759 N at 2 %, 0.281 N against 0.759 N at 20 % (the
+//! limits carry the rest to the base: 1.76 N); ChainMail step (deform + 10 sweeps) 4 to 5 ms,
+//! relaxation to convergence 2 400 and 5 500 sweeps (0.9 and 1.9 s). The links' springs: 0.131 and
+//! 0.281 relaxed, force 0.0808 N at 2 %; step 0.6 ms. FEM load 5 to 6 s, 165 MiB dense; FEM step
+//! ≈ 15 µs.
 
 use std::fmt;
 use web_time::Instant;
@@ -48,7 +55,8 @@ pub struct CompareConfig {
     pub material: ElasticMaterial,
     /// How cubes are cut into tetrahedra. Default six.
     pub split: Split,
-    /// ChainMail material. Default relative stretch 1.2, compress 0.7, shear 0.3, stiffness 1.
+    /// ChainMail material. Default [`chainmail_material`] of the FEM material: relative stretch 1.2,
+    /// compress 0.7, shear 0.3, elastic cells of the FEM's E and ν.
     pub chainmail: Material,
     /// Imposed displacements as fractions of the block height `(ny − 1) · spacing`. Default
     /// `[0.02, 0.2]`.
@@ -80,7 +88,7 @@ impl Default for CompareConfig {
             spacing: 0.005,
             material: ElasticMaterial::default(),
             split: Split::Six,
-            chainmail: Material::relative(1.2, 0.7, 0.3),
+            chainmail: chainmail_material(&ElasticMaterial::default()),
             magnitudes: vec![0.02, 0.2],
             direction: [0.0, -1.0, 0.0],
             grasp_radius: default_grasp_radius(),
@@ -90,6 +98,16 @@ impl Default for CompareConfig {
             timing_repeats: 50,
             memory_limit: super::model::DEFAULT_MEMORY_LIMIT,
         }
+    }
+}
+
+/// The ChainMail material that stands for `material` in the comparison: relative limits stretch 1.2,
+/// compress 0.7, shear 0.3, elastic cells of the same Young's modulus and Poisson's ratio.
+pub fn chainmail_material(material: &ElasticMaterial) -> Material {
+    Material {
+        poisson_ratio: Some(material.poisson as f32),
+        young_modulus: material.young as f32,
+        ..Material::relative(1.2, 0.7, 0.3)
     }
 }
 
@@ -121,10 +139,11 @@ pub struct CompareRow {
     pub converged: bool,
     /// Force the FEM needs on the grasped nodes for this displacement (their sum), newtons.
     pub fem_force: [f64; 3],
-    /// Force ChainMail's springs need on the grasped nodes (minus the pull of the links leaving the
-    /// patch) after relaxation to convergence, newtons: each link a spring `c·A/L` on the change of
-    /// its offset, `c` = [`ElasticMaterial::lattice_modulus`] of the FEM's material, as the tissue
-    /// computes a volume's force (`tissue/force.rs`).
+    /// Force ChainMail needs on the grasped nodes after relaxation to convergence, newtons: with
+    /// elastic cells `K u` summed over them; with the links' springs, minus the pull of the links
+    /// leaving the patch, each a spring `c·A/L` on the change of its offset, `c` =
+    /// [`ElasticMaterial::lattice_modulus`] of the FEM's material. As the tissue computes a volume's
+    /// force (`tissue/force.rs`).
     pub chainmail_force: [f64; 3],
     /// The same after one timed step (`step_sweeps` sweeps), newtons.
     pub chainmail_force_step: [f64; 3],
@@ -176,7 +195,7 @@ impl fmt::Display for CompareReport {
         let c = &self.config;
         writeln!(
             f,
-            "block {}×{}×{} nodes, spacing {} m, {} tets; FEM E = {} Pa, ν = {}; ChainMail {:?}",
+            "block {}×{}×{} nodes, spacing {} m, {} tets; FEM E = {} Pa, ν = {}; ChainMail {:?}, relaxing {}",
             c.dims[0],
             c.dims[1],
             c.dims[2],
@@ -184,7 +203,11 @@ impl fmt::Display for CompareReport {
             self.tets,
             c.material.young,
             c.material.poisson,
-            c.chainmail.limits
+            c.chainmail.limits,
+            match c.chainmail.poisson_ratio {
+                Some(nu) => format!("elastic cells (ν = {nu})"),
+                None => "the links' springs".to_string(),
+            }
         )?;
         writeln!(
             f,
@@ -342,6 +365,15 @@ fn spring_force(body: &Body, set: &[ElementId], modulus: f64) -> [f64; 3] {
     f
 }
 
+/// The force that holds `set` where it is: the elastic cells' (`K u` over the set) where the body
+/// has them, else the links' springs ([`spring_force`]).
+fn held_force(body: &Body, set: &[ElementId], modulus: f64) -> [f64; 3] {
+    match body.elastic_force(set) {
+        Some(f) => f.map(f64::from),
+        None => spring_force(body, set, modulus),
+    }
+}
+
 /// Moves the grasped patch as the tissue's forceps do: the centre to `centre_goal` in a chain
 /// reaction of its own, then the rest to their goals together, the centre held; then all held.
 fn grasp(
@@ -458,7 +490,7 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
             step_time += t.elapsed().as_secs_f64();
         }
         let (rms_step, _) = errors(&model, &body, &u, imposed);
-        let chainmail_force_step = spring_force(&body, &held, modulus);
+        let chainmail_force_step = held_force(&body, &held, modulus);
 
         // ChainMail: the chain reaction alone, then relaxation to convergence.
         body.reset_to_rest();
@@ -467,16 +499,19 @@ pub fn compare(cfg: &CompareConfig) -> Result<CompareReport, FemError> {
         let (rms_unrelaxed, _) = errors(&model, &body, &u, imposed);
         let t_unrelaxed = t.elapsed();
         let t = Instant::now();
+        // (No finer than twice the spacing of f32 positions across the block: sweeps of elastic
+        // cells end in moves of an ulp or two, which a finer tolerance would wait on for ever.)
+        let extent = cfg.dims.iter().map(|&n| (n - 1) as f64 * cfg.spacing).fold(0.0, f64::max);
         let budget = RelaxBudget {
             max_sweeps: cfg.max_sweeps,
             max_time: None,
-            tolerance: (cfg.relax_tolerance * imposed) as f32,
+            tolerance: (cfg.relax_tolerance * imposed).max(2.0 * f64::from(f32::EPSILON) * extent) as f32,
         };
         let report = body.relax(&mut ws, budget, RelaxRegion::All);
         let converge = t_unrelaxed + t.elapsed();
         let (rms_relaxed, max_relaxed) = errors(&model, &body, &u, imposed);
-        let chainmail_force = spring_force(&body, &held, modulus);
-        let base = spring_force(&body, &pinned, modulus);
+        let chainmail_force = held_force(&body, &held, modulus);
+        let base = held_force(&body, &pinned, modulus);
         let chainmail_base_force = base.map(|x| -x);
         let fem_force = forces.iter().fold([0.0; 3], |s, f| [0, 1, 2].map(|k| s[k] + f[k]));
         let (fem_links_outside, fem_worst_outside) = fem_outside_limits(&model, &mut body, &u, cfg.spacing)?;

@@ -262,11 +262,35 @@ pub(crate) fn material(at: &FieldPath, m: &Material) -> Result<(), Problem> {
             );
         }
     }
+    if let Some(nu) = m.poisson_ratio {
+        let a = at.f("poisson_ratio");
+        if !(finite(&a, nu)? > -1.0 && nu < 0.5) {
+            return problem(
+                &a,
+                format!(
+                    "is {nu}, expected a value in (-1, 0.5) (soft tissue: about 0.45; 0.5 would be incompressible)"
+                ),
+            );
+        }
+    }
     // Backstop: the engine's own check must agree.
     if let Err(e) = m.validate() {
         return problem(at, format!("is not usable: {e}"));
     }
     Ok(())
+}
+
+/// A material of something without cells (a layer, connective fibres) has no Poisson's ratio.
+fn cellless(at: &FieldPath, m: &Material, what: &str) -> Result<(), Problem> {
+    match m.poisson_ratio {
+        Some(nu) => problem(
+            &at.f("poisson_ratio"),
+            format!(
+                "is Some({nu}), expected None: the Poisson's ratio relaxes a Volume's cells, and {what} has none"
+            ),
+        ),
+        None => Ok(()),
+    }
 }
 
 fn surface(at: &FieldPath, s: &Surface) -> Result<(), Problem> {
@@ -377,6 +401,7 @@ fn layers(l: &LayerTissue, at: &FieldPath) -> Result<(), Problem> {
             _ => {}
         }
         material(&a.f("material"), &layer.material)?;
+        cellless(&a.f("material"), &layer.material, "a layer")?;
     }
     if let [upper, lower] = l.layers.as_slice()
         && upper.offset <= lower.offset
@@ -470,6 +495,7 @@ fn connective(at: &FieldPath, c: &Connective, l: &LayerTissue) -> Result<(), Pro
         );
     };
     material(&at.f("material"), &c.material)?;
+    cellless(&at.f("material"), &c.material, "connective fibres")?;
     let d = at.f("density");
     if !(finite(&d, c.density)? > 0.0 && c.density <= 1.0) {
         return problem(&d, format!("is {}, expected a share of the fibres' sites in (0, 1]", c.density));

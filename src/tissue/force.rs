@@ -253,6 +253,11 @@ impl Tissue {
         if let Model::Fem(fem) = &self.model {
             return if held.is_empty() { [0.0; 3] } else { fem.reaction() };
         }
+        // A volume of elastic cells pushes back by its cells' energy: `K u` holds the set, so the
+        // tissue exerts its opposite.
+        if let Some(g) = self.body.elastic_force(held) {
+            return g.map(|x| -x);
+        }
         let mut f = [0.0f32; 3];
         for &e in held {
             for (n, l) in self.body.lattice().neighbours(e) {

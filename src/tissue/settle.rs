@@ -55,7 +55,10 @@ impl Tissue {
         // link within its box, bring such tissue back alone.
         // (Nor while the probe's ball holds what it touches: `press.rs`; found by
         // `tests/tissue_limits.rs`, `a_fast_deep_probe_keeps_the_limits`.)
-        let correcting = self.settling && self.jaws.held.is_empty() && !self.probe.holding;
+        // (Nor in a volume with elastic cells: the correction's coarse operator is the links'
+        // Laplacian, not the cells' elasticity; its sweeps alone settle such a volume.)
+        let correcting =
+            self.settling && self.jaws.held.is_empty() && !self.probe.holding && !self.body.has_elastic();
         let updates = if correcting && !self.filling() { updates / 2 } else { updates };
         if correcting && self.coarse.placing() {
             // The correction is placing the region's elements: sweeps now would be undone when the

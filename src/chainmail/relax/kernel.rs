@@ -27,6 +27,7 @@ impl Body {
     #[inline]
     pub(crate) fn relaxed_into_boxes(&self, i: usize) -> [f32; 3] {
         let Some((q, lo, hi)) = self.relaxed_bounded_in(i, |j| self.pos[j]) else { return self.pos[i] };
+        let q = self.relaxed_elastic(i, self.pos[i], lo, hi, |j| self.pos[j]).unwrap_or(q);
         let mut out = q;
         for c in 0..3 {
             if lo[c] <= hi[c] {
@@ -46,7 +47,7 @@ impl Body {
     #[inline(always)]
     pub(crate) fn relaxed_in(&self, i: usize, pos_of: impl Fn(usize) -> [f32; 3]) -> [f32; 3] {
         match self.relaxed_bounded_in(i, &pos_of) {
-            Some((q, _, _)) => q,
+            Some((q, lo, hi)) => self.relaxed_elastic(i, pos_of(i), lo, hi, &pos_of).unwrap_or(q),
             None => pos_of(i),
         }
     }

@@ -16,10 +16,12 @@ use super::body::{Body, FIXED};
 use super::ids::ElementId;
 use super::workspace::Workspace;
 pub use coarse::Coarse;
+pub(crate) use elastic::Elastic;
 use kernel::{max_change, relaxed_row};
 
 mod bands;
 mod coarse;
+mod elastic;
 mod grid;
 mod kernel;
 mod region;
@@ -67,10 +69,39 @@ pub struct RelaxReport {
 impl Body {
     /// Relaxes the body within `budget`. Pinned and held elements stay where they are.
     pub fn relax(&mut self, ws: &mut Workspace, budget: RelaxBudget, region: RelaxRegion) -> RelaxReport {
+        self.refresh_elastic();
+        if self.has_elastic() {
+            // Elastic cells relax in place (Gauss-Seidel, each element's move lowering the energy).
+            return self.within_budget(ws, budget, |body, ws| match region {
+                RelaxRegion::All => body.sweep_in_place(0..body.pos.len()),
+                RelaxRegion::Moved => {
+                    let moved = std::mem::take(&mut ws.moved);
+                    let change = body.sweep_in_place(moved.iter().map(|&i| i as usize));
+                    ws.moved = moved;
+                    change
+                }
+            });
+        }
         self.within_budget(ws, budget, |body, ws| match region {
             RelaxRegion::All => body.sweep_all(ws),
             RelaxRegion::Moved => body.sweep_moved(ws),
         })
+    }
+
+    /// One in-place sweep over `elements` (each moved with the moves before it made): the sweep of a
+    /// body with elastic cells.
+    fn sweep_in_place(&mut self, elements: impl Iterator<Item = usize>) -> f32 {
+        let mut change = 0.0f32;
+        for i in elements {
+            if i >= self.pos.len() {
+                continue;
+            }
+            let p = self.pos[i];
+            let q = self.relaxed_unless_fixed(i);
+            change = max_change(change, p, q);
+            self.pos[i] = q;
+        }
+        change
     }
 
     /// Runs `sweep` (which returns the largest move of the sweep) until the budget is spent or the
@@ -145,6 +176,12 @@ impl Body {
         budget: RelaxBudget,
         elements: &[ElementId],
     ) -> RelaxReport {
+        self.refresh_elastic();
+        if self.has_elastic() {
+            return self.within_budget(ws, budget, |body, _| {
+                body.sweep_in_place(elements.iter().map(|e| e.index()))
+            });
+        }
         self.within_budget(ws, budget, |body, ws| {
             let mut change = 0.0f32;
             for &e in elements {

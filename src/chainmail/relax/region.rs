@@ -22,6 +22,10 @@ impl Body {
         part: [&[ElementId]; 2],
         last_move: &mut [f32],
     ) -> f32 {
+        self.refresh_elastic();
+        if self.has_elastic() {
+            return self.sweep_region_plain(part, last_move);
+        }
         match (self.width, self.pairs.width) {
             (5, 4) => simd.arch().dispatch(Sweep::<5, 4> { body: self, simd, part, last_move }),
             (4, 0) => simd.arch().dispatch(Sweep::<4, 0> { body: self, simd, part, last_move }),
