@@ -59,6 +59,9 @@ pub(crate) struct Probe {
     bottom: f32,
     marks: Vec<u64>,
     queue: Vec<u32>,
+    /// A volume's press: the top face's elements the ball moves and where to (scratch).
+    group: Vec<ElementId>,
+    goals: Vec<[f32; 3]>,
 }
 
 impl Probe {
@@ -76,8 +79,9 @@ impl Tissue {
         std::mem::swap(&mut self.probe.patch, &mut self.probe.last);
         self.probe.patch.clear();
         let moved = match self.geometry {
-            Geometry::Surface(_) if !self.is_fem() && !self.probe.no_cone => self.press(tip, radius, true),
-            _ => self.push_one(tip, radius),
+            _ if self.is_fem() || self.probe.no_cone => self.push_one(tip, radius),
+            Geometry::Surface(_) => self.press(tip, radius, true),
+            Geometry::Volume => self.press_volume(tip, radius),
         };
         // What the probe pressed in and no longer touches settles back (`settle.rs`).
         if let (Some(e), None) = (touched, self.probe.contact) {
@@ -121,8 +125,13 @@ impl Tissue {
     /// footprint's free elements). Searches only through what moves, unless the press's cone is kept.
     /// Returns the elements moved.
     pub fn hold_press(&mut self) -> u32 {
-        match self.probe.ball {
-            Some((tip, radius)) if self.probe.contact.is_some() => self.press(tip, radius, false),
+        match (self.probe.ball, self.geometry) {
+            (Some((tip, radius)), Geometry::Surface(_)) if self.probe.contact.is_some() => {
+                self.press(tip, radius, false)
+            }
+            (Some((tip, radius)), Geometry::Volume) if self.probe.contact.is_some() => {
+                self.press_volume(tip, radius)
+            }
             _ => 0,
         }
     }
@@ -260,6 +269,109 @@ impl Tissue {
             }
         }
         at
+    }
+
+    /// A ball pressing a volume's top face (`y` up, lattice coordinates are world coordinates): every
+    /// free element of the face within the ball's radius of its centre across the face (`x`, `z`) and
+    /// above the ball's lower surface there goes down to it, together, by one chain reaction of the
+    /// group. The face is a grid, so the footprint is read from the elements whose rest position lies
+    /// within the radius and two spacings (the face's elements move across it by no more than their
+    /// shear limits allow): the work is the footprint's and what it moves, at any resolution. The
+    /// element nearest the centre is pressed whatever its distance within a spacing past the radius,
+    /// as on a surface: a ball smaller than the spacing touches the face between elements.
+    fn press_volume(&mut self, tip: [f32; 3], radius: f32) -> u32 {
+        self.probe.ball = None;
+        let Some([nx, ny, nz]) = self.body.lattice().dims() else { return self.push_one(tip, radius) };
+        let rest = self.body.lattice().rest_positions();
+        let (Some(&r0), Some(&rx), Some(&rz)) =
+            (rest.first(), rest.get(1.min(nx - 1)), rest.get((nx * ny).min(rest.len() - 1)))
+        else {
+            return 0;
+        };
+        let (dx, dz) = ((rx[0] - r0[0]).max(f32::MIN_POSITIVE), (rz[2] - r0[2]).max(f32::MIN_POSITIVE));
+        let window = |t: f32, lo: f32, d: f32, n: usize| {
+            let a = ((t - radius - lo) / d).floor() - 2.0;
+            let b = ((t + radius - lo) / d).ceil() + 2.0;
+            let clip = |x: f32| if x.is_finite() { x.clamp(0.0, (n - 1) as f32) as usize } else { 0 };
+            (clip(a), clip(b))
+        };
+        let ((i0, i1), (k0, k1)) = (window(tip[0], r0[0], dx, nx), window(tip[2], r0[2], dz, nz));
+        let top = |i: usize, k: usize| (i + nx * ((ny - 1) + ny * k)) as u32;
+        let pos = self.body.positions();
+        let across = |p: [f32; 3]| ((tip[0] - p[0]).powi(2) + (tip[2] - p[2]).powi(2)).sqrt();
+        // The element of the window nearest the centre across the face.
+        let mut centre = None;
+        for k in k0..=k1 {
+            for i in i0..=i1 {
+                let e = top(i, k);
+                let d = pos.get(e as usize).map_or(f32::INFINITY, |&p| across(p));
+                if centre.is_none_or(|(_, c)| d < c) {
+                    centre = Some((e, d));
+                }
+            }
+        }
+        let Some((centre, d)) = centre else { return 0 };
+        if d >= radius + self.spacing {
+            return 0;
+        }
+        let Probe { group, goals, patch, .. } = &mut self.probe;
+        group.clear();
+        goals.clear();
+        patch.clear();
+        let mut touching = false;
+        for k in k0..=k1 {
+            for i in i0..=i1 {
+                let e = top(i, k);
+                let Some(&p) = pos.get(e as usize) else { continue };
+                let l = across(p);
+                let l = if e == centre { l.min(0.7 * radius) } else { l };
+                if l >= radius {
+                    continue;
+                }
+                let limit = tip[1] - (radius * radius - l * l).sqrt();
+                if self.body.is_pinned(ElementId(e)) || self.body.is_held(ElementId(e)) {
+                    continue;
+                }
+                touching |= p[1] >= limit - 0.01 * self.spacing;
+                if p[1] > limit {
+                    group.push(ElementId(e));
+                    goals.push([p[0], limit, p[2]]);
+                }
+            }
+        }
+        if !touching {
+            return 0;
+        }
+        let (group, goals) = (std::mem::take(&mut self.probe.group), std::mem::take(&mut self.probe.goals));
+        let mut moved = 0;
+        if !group.is_empty()
+            && let Ok(d) = self.body.deform_group(&mut self.ws, &group, &goals, Pass::All)
+        {
+            moved = d.moved;
+            self.activate_moved();
+        }
+        self.probe.group = group;
+        self.probe.goals = goals;
+        // In contact: the footprint's elements now on the ball's surface (within a hundredth of a
+        // spacing).
+        self.probe.contact = Some(ElementId(centre));
+        self.probe.ball = Some((tip, radius));
+        let pos = self.body.positions();
+        for k in k0..=k1 {
+            for i in i0..=i1 {
+                let e = top(i, k);
+                let Some(&p) = pos.get(e as usize) else { continue };
+                let l = across(p);
+                let l = if e == centre { l.min(0.7 * radius) } else { l };
+                if l < radius
+                    && !self.body.is_pinned(ElementId(e))
+                    && p[1] >= tip[1] - (radius * radius - l * l).sqrt() - 0.01 * self.spacing
+                {
+                    self.probe.patch.push(ElementId(e));
+                }
+            }
+        }
+        moved
     }
 
     /// A ball pressing the one element nearest its centre by the chain reaction (a volume, a
