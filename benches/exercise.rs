@@ -2,7 +2,9 @@
 //! a trainee's session runs them: `exercise/meninges_careful/...` (the meninges scene, the layers
 //! lifted and the fibres cut under them), `exercise/meninges_probe/...` (the same scene, the probe
 //! pressing the dura, held, slid across and held) and `exercise/durotomy_careful/...` (the default
-//! exercise: a U-shaped flap cut in the dura, reflected, the arachnoid freed under it).
+//! exercise: a U-shaped flap cut in the dura, reflected, the arachnoid freed under it), and
+//! `exercise/volume/{16x16,24x24,32x32}` (the bundled volume of elastic cells at n³, pressed by the
+//! probe and a corner pulled up by the forceps).
 //!
 //! Criterion reports the mean step; p50 and p99 of the steps timed are printed after each bench
 //! (a step's cost depends on where in the script it falls, so the tail matters as much as the mean),
@@ -25,13 +27,25 @@ const CAREFUL: &str = include_str!("../scenes/scripts/meninges_careful.ron");
 const PROBE: &str = include_str!("../scenes/scripts/meninges_probe.ron");
 const DUROTOMY: &str = include_str!("../scenes/durotomy.ron");
 const DUROTOMY_CAREFUL: &str = include_str!("../scenes/scripts/durotomy_careful.ron");
+const VOLUME: &str = include_str!("../scenes/volume.ron");
+const VOLUME_SCRIPT: &str = include_str!("../scenes/scripts/volume.ron");
 
+/// The scene at `nu × nv` per layer; a volume at `nu × nu × nu` (`nv` unused).
 fn scene_at(text: &str, nu: u32, nv: u32) -> Scene {
     let mut scene = Scene::from_str(text, "scene").expect("scene");
-    if let SceneTissue::Layers(l) = &mut scene.tissue {
-        l.resolution = [nu, nv];
+    match &mut scene.tissue {
+        SceneTissue::Layers(l) => l.resolution = [nu, nv],
+        SceneTissue::Volume(v) => v.resolution = [nu; 3],
     }
     scene
+}
+
+/// The elements of `scene` at that size: two layers, or a volume's cube.
+fn elements(scene: &str, nu: u32, nv: u32) -> u64 {
+    match scene_at(scene, nu, nv).tissue {
+        SceneTissue::Volume(_) => u64::from(nu).pow(3),
+        _ => 2 * u64::from(nu) * u64::from(nv),
+    }
 }
 
 struct Session {
@@ -73,6 +87,10 @@ fn exercise_benches(c: &mut Criterion) {
     exercise(c, "meninges_probe", MENINGES, &probe, &[(128, 96), (256, 192), (512, 384)]);
     let durotomy = Script::from_str(DUROTOMY_CAREFUL, "durotomy_careful.ron").expect("careful script");
     exercise(c, "durotomy_careful", DUROTOMY, &durotomy, &[(64, 48), (128, 96), (256, 192)]);
+    // The volume of elastic cells, pressed by the probe and pulled up by the forceps, at 16³ (the
+    // scene's), 24³ and 32³.
+    let volume = Script::from_str(VOLUME_SCRIPT, "volume.ron").expect("volume script");
+    exercise(c, "volume", VOLUME, &volume, &[(16, 16), (24, 24), (32, 32)]);
 }
 
 fn exercise(c: &mut Criterion, name: &str, scene: &str, script: &Script, sizes: &[(u32, u32)]) {
@@ -90,7 +108,7 @@ fn exercise(c: &mut Criterion, name: &str, scene: &str, script: &Script, sizes: 
         // nine sessions are timed, and an unfinished last one, its quiet end missing, raised the
         // printed mean by several per cent.)
         let mut whole = 0usize;
-        group.throughput(Throughput::Elements(2 * u64::from(nu) * u64::from(nv)));
+        group.throughput(Throughput::Elements(elements(scene, nu, nv)));
         group.bench_function(format!("{nu}x{nv}"), |b| {
             b.iter_custom(|iters| {
                 let mut total = Duration::ZERO;

@@ -33,8 +33,8 @@ use super::{Geometry, LinkKind, Model, Tissue};
 use crate::chainmail::{ElementId, LinkId};
 use crate::fem::ElasticMaterial;
 
-/// Poisson's ratio of a ChainMail volume's tissue (its material carries only `E`): soft tissue is
-/// nearly incompressible.
+/// Poisson's ratio of a ChainMail volume's tissue where its material has none
+/// ([`crate::chainmail::Material::poisson_ratio`]): soft tissue is nearly incompressible.
 pub const VOLUME_POISSON: f64 = 0.45;
 
 /// Each link's geometric factor: `k = E·t·factor` for a layer on a surface, `E·factor` otherwise.
@@ -140,10 +140,11 @@ impl LinkFactors {
     }
 }
 
-/// The modulus of a volume's lattice, pascals ([`ElasticMaterial::lattice_modulus`] at
-/// [`VOLUME_POISSON`]).
-fn volume_modulus(young: f32) -> f32 {
-    ElasticMaterial::new(f64::from(young), VOLUME_POISSON).lattice_modulus() as f32
+/// The modulus of a volume's lattice, pascals ([`ElasticMaterial::lattice_modulus`] at the material's
+/// Poisson's ratio, [`VOLUME_POISSON`] where it has none).
+fn volume_modulus(m: &crate::chainmail::Material) -> f32 {
+    let nu = m.poisson_ratio.map_or(VOLUME_POISSON, f64::from);
+    ElasticMaterial::new(f64::from(m.young_modulus), nu).lattice_modulus() as f32
 }
 
 fn spring(tissue: &Tissue, kind: LinkKind) -> Spring {
@@ -165,7 +166,7 @@ impl Tissue {
         match spring(self, kind) {
             Spring::Membrane => m.young_modulus * m.thickness * g,
             Spring::Fibre => m.young_modulus * g,
-            Spring::Solid => volume_modulus(m.young_modulus) * g,
+            Spring::Solid => volume_modulus(m) * g,
         }
     }
 
@@ -290,7 +291,7 @@ impl Tissue {
                 .fold(0.0f32, f32::max)
         };
         match self.geometry {
-            Geometry::Volume => 4.0 * radius * modulus(&|m| volume_modulus(m.young_modulus)),
+            Geometry::Volume => 4.0 * radius * modulus(&volume_modulus),
             Geometry::Surface(_) => {
                 let rest = self.body.lattice().rest_positions();
                 let Some(&c) = rest.get(centre.index()) else { return 0.0 };

@@ -58,8 +58,6 @@ pub(crate) struct Elastic {
     cell: Vec<u32>,
     /// The distinct cell stiffnesses.
     stiffness: Vec<CellStiffness>,
-    /// The sides of each cell stiffness's cell.
-    side: Vec<[f32; 3]>,
     /// The distinct stencils (see [`Stencil`]).
     stencil: Vec<Stencil>,
     /// Where each stencil sits, by the stiffness of the element's eight cells.
@@ -78,10 +76,6 @@ pub(crate) struct Stencil {
     /// The block coupling the element's force to the displacement of its neighbour at offset
     /// `(dx, dy, dz)`, at `(dx + 1) + 3 (dy + 1) + 9 (dz + 1)` (13: its own, the diagonal block).
     block: [[f32; 9]; 27],
-    /// The force of the rest offsets, `Σ block[o] · (rest[j] − rest[i])`: subtracted from the sum over
-    /// the current offsets, it gives the force of the displacements (the blocks sum to zero, as no
-    /// translation strains a cell).
-    rest_force: [f32; 3],
     /// The neighbours' blocks, with their element offsets from the element (in a grid of the
     /// body's dims): those of `block` that are not the element's own and not zero.
     entries: Vec<(isize, [f32; 9])>,
@@ -191,10 +185,13 @@ impl Body {
                     let class = match material.poisson_ratio {
                         Some(nu) if intact => {
                             let r = &lattice.rest;
+                            // (To a tenth of a micrometre: the cells of an even grid, whose rest
+                            // positions' rounding differs in the last bits, share one stiffness and
+                            // their elements a handful of stencils.)
                             let side = [1, 2, 4].map(|c| {
                                 let (p, q) = (r[corner(0)], r[corner(c)]);
                                 let d = [0, 1, 2].map(|k| f64::from(q[k]) - f64::from(p[k]));
-                                (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+                                ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * 1e7).round() * 1e-7
                             });
                             let scale = f64::from(material.young_modulus) * f64::from(material.stiffness);
                             let key = [
@@ -208,7 +205,6 @@ impl Body {
                             let id = *el.index.entry(key).or_insert(next);
                             if id == next {
                                 el.stiffness.push(cell_stiffness(side, f64::from(nu), scale));
-                                el.side.push(side.map(|x| x as f32));
                             }
                             el.any = true;
                             id
@@ -241,7 +237,7 @@ impl Body {
                     let next = el.stencil.len() as u32;
                     let id = *el.stencil_index.entry(key).or_insert(next);
                     if id == next {
-                        el.stencil.push(stencil_of(&key, &el.stiffness, &el.side, dims));
+                        el.stencil.push(stencil_of(&key, &el.stiffness, dims));
                     }
                     el.element[at(x, y, z)] = id;
                 }
@@ -274,7 +270,8 @@ impl Body {
     }
 
     /// The energy's gradient at element `i` and its diagonal block, from its stencil `id`: the
-    /// blocks times the neighbours' offsets from `i`, less the rest offsets' force. The same as
+    /// blocks times the neighbours' displacements less the element's (the blocks sum to zero, as no
+    /// translation strains a cell), so that the tissue at rest feels exactly nothing. The same as
     /// [`Body::elastic_cells`] up to rounding (tested below).
     #[inline]
     pub(crate) fn elastic_stencil(
@@ -286,11 +283,15 @@ impl Body {
     ) -> ([f32; 3], [f32; 9]) {
         let el = &self.elastic;
         let st = &el.stencil[id as usize];
-        let mut g = st.rest_force.map(|x| -x);
+        let rest = &self.lattice.rest;
+        let ri = rest[i];
+        let ui = [p[0] - ri[0], p[1] - ri[1], p[2] - ri[2]];
+        let mut g = [0.0f32; 3];
         for (off, block) in &st.entries {
             // (Only neighbours that exist have entries.)
-            let q = pos_of(i.wrapping_add_signed(*off));
-            let u = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+            let j = i.wrapping_add_signed(*off);
+            let (q, r) = (pos_of(j), rest[j]);
+            let u = [(q[0] - r[0]) - ui[0], (q[1] - r[1]) - ui[1], (q[2] - r[2]) - ui[2]];
             for r in 0..3 {
                 g[r] += block[r * 3] * u[0] + block[r * 3 + 1] * u[1] + block[r * 3 + 2] * u[2];
             }
@@ -370,26 +371,20 @@ impl Body {
 }
 
 /// The stencil of an element that is corner `a` of a cell of stiffness `key[a]` (`NONE`: no cell).
-fn stencil_of(key: &[u32; 8], stiffness: &[CellStiffness], side: &[[f32; 3]], dims: [usize; 3]) -> Stencil {
+fn stencil_of(key: &[u32; 8], stiffness: &[CellStiffness], dims: [usize; 3]) -> Stencil {
     let mut block = [[0.0f32; 9]; 27];
-    let mut rest_force = [0.0f64; 3];
     let mut mask = 0u32;
     for (a, &class) in key.iter().enumerate() {
         if class == NONE {
             continue;
         }
-        let (k, side) = (&stiffness[class as usize], side[class as usize]);
+        let k = &stiffness[class as usize];
         for b in 0..8 {
             let off = [0, 1, 2].map(|c| ((b >> c) & 1) as i32 - ((a >> c) & 1) as i32);
             let o = ((off[0] + 1) + 3 * (off[1] + 1) + 9 * (off[2] + 1)) as usize;
             let kb = &k[a * 8 + b];
             for (s, v) in block[o].iter_mut().zip(kb) {
                 *s += v;
-            }
-            for r in 0..3 {
-                for c in 0..3 {
-                    rest_force[r] += f64::from(kb[r * 3 + c]) * f64::from(off[c] as f32 * side[c]);
-                }
             }
             if o != 13 {
                 mask |= 1 << o;
@@ -405,7 +400,7 @@ fn stencil_of(key: &[u32; 8], stiffness: &[CellStiffness], side: &[[f32; 3]], di
             (off, block[o])
         })
         .collect();
-    Stencil { block, rest_force: rest_force.map(|x| x as f32), entries }
+    Stencil { block, entries }
 }
 
 /// The projected coordinate steps of an element at `p` with energy gradient `g` and diagonal block
@@ -538,6 +533,22 @@ mod tests {
             })
             .fold(0.0f32, f32::max);
         assert!(off < 1e-5, "{off} m from rest");
+    }
+
+    /// At rest every element feels exactly nothing (whatever the rounding of its rest position and of
+    /// the cells' sides), so nothing at rest ever moves or joins a region.
+    #[test]
+    fn rest_is_exactly_balanced() {
+        let lattice = Lattice::grid(&crate::chainmail::GridSpec::uniform([9, 7, 8], 0.0013)).expect("grid");
+        let mut body =
+            Body::new(lattice, Material { poisson_ratio: Some(0.45), ..Material::default() }).expect("body");
+        body.refresh_elastic();
+        for i in 0..body.element_count() {
+            let id = body.elastic.element[i];
+            let (g, _) = body.elastic_stencil(i, body.pos[i], id, |j| body.pos[j]);
+            assert_eq!(g, [0.0; 3], "element {i}");
+        }
+        assert!(body.elastic.stencil.len() <= 27, "{} stencils on an even grid", body.elastic.stencil.len());
     }
 
     #[test]
