@@ -71,7 +71,11 @@ fn worst_violation(world: &World) -> (f32, u32) {
 /// Plays `acts` (each a move there in that many steps, or a command held for that many steps) on the
 /// meninges at 40 × 30 and checks every intact link after every step.
 fn play(acts: &[(Act, u8)]) -> Result<(), String> {
-    let mut world = world(40, 30);
+    play_on(world(40, 30), acts, 0.0)
+}
+
+/// [`play`] on `world`, the moves' heights above the surface lowered by `down` metres.
+fn play_on(mut world: World, acts: &[(Act, u8)], down: f32) -> Result<(), String> {
     let spacing = world.tissue().spacing();
     // Moves go there in small steps, as a hand does.
     let mut at = world.tissue().surface_point(0.5, 0.5, 0.003);
@@ -81,7 +85,7 @@ fn play(acts: &[(Act, u8)]) -> Result<(), String> {
             Act::To(..) => {}
         }
         let goal = match *a {
-            Act::To(u, v, h) => world.tissue().surface_point(u, v, h),
+            Act::To(u, v, h) => world.tissue().surface_point(u, v, h - down),
             Act::Do(_) => at,
         };
         let from = at;
@@ -116,6 +120,27 @@ proptest! {
         let played = play(&acts);
         prop_assert!(played.is_ok(), "{}", played.err().unwrap_or_default());
     }
+
+    /// The same on the bundled volume of elastic cells (`poisson_ratio: Some(0.45)`) at 10³: the probe
+    /// pressed up to 8 mm in, the forceps pulling, the scalpel cutting; the cells' relaxation keeps
+    /// every intact link within its limits too.
+    #[test]
+    fn no_intact_link_of_an_elastic_volume_leaves_its_limits(
+        acts in proptest::collection::vec((act(), 1u8..30), 1..30)
+    ) {
+        let played = play_on(volume(10), &acts, 0.008);
+        prop_assert!(played.is_ok(), "{}", played.err().unwrap_or_default());
+    }
+}
+
+fn volume(n: u32) -> World {
+    let mut scene = dissect::scene::Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/volume.ron"))
+        .expect("volume scene");
+    if let dissect::scene::Tissue::Volume(v) = &mut scene.tissue {
+        assert!(v.material.poisson_ratio.is_some(), "the bundled volume relaxes elastic cells");
+        v.resolution = [n; 3];
+    }
+    scene.build_world(false).expect("world")
 }
 
 /// A grasp dragged 2 mm up and across stays clamped while the probe is selected (two-handed work) and
