@@ -105,7 +105,7 @@ enum Command {
     /// Compare ChainMail with the linear finite-element reference on the same block: surface
     /// displacement error (RMS, relative to the imposed displacement) and time per step of each.
     #[command(
-        after_help = "The block has N x N x N nodes 5 mm apart, its base clamped; the top nodes within the grasp radius of\nthe top centre are pushed down together by 2% and by 20% of the block's height.\n\nExample:\n  dissect compare --nodes 16 --json out/compare.json\n  dissect compare --nodes 16 --grasp-radius 0 --limits 1.2,0.7,0.3"
+        after_help = "The block has N x N x N nodes 5 mm apart, its base clamped; the top nodes within the grasp radius of\nthe top centre are pushed down together by 2% and by 20% of the block's height.\n\nExample:\n  dissect compare --nodes 16 --json out/compare.json\n  dissect compare --nodes 16 --grasp-radius 0 --limits 1.2,0.7,0.3\n  dissect compare --nodes 16 --energy links   # Gibson's relaxation of the links' springs"
     )]
     Compare {
         /// Nodes along each axis of the block (2 to 256; the model refuses more than 512 MiB of matrices).
