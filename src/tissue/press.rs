@@ -314,6 +314,16 @@ impl Tissue {
         if d >= radius + self.spacing {
             return 0;
         }
+        // The ball's lower surface over a free element of its footprint at `p` (the centre's taken
+        // within the ball whatever its distance: the ball may touch the face between elements).
+        let surface = move |body: &crate::chainmail::Body, e: u32, p: [f32; 3]| {
+            let l = across(p);
+            let l = if e == centre { l.min(0.7 * radius) } else { l };
+            let free = !(body.is_pinned(ElementId(e)) || body.is_held(ElementId(e)));
+            (l < radius && free).then(|| tip[1] - (radius * radius - l * l).sqrt())
+        };
+        // In contact: within a hundredth of a spacing of it.
+        let reach = 0.01 * self.spacing;
         let Probe { group, goals, patch, .. } = &mut self.probe;
         group.clear();
         goals.clear();
@@ -323,16 +333,8 @@ impl Tissue {
             for i in i0..=i1 {
                 let e = top(i, k);
                 let Some(&p) = pos.get(e as usize) else { continue };
-                let l = across(p);
-                let l = if e == centre { l.min(0.7 * radius) } else { l };
-                if l >= radius {
-                    continue;
-                }
-                let limit = tip[1] - (radius * radius - l * l).sqrt();
-                if self.body.is_pinned(ElementId(e)) || self.body.is_held(ElementId(e)) {
-                    continue;
-                }
-                touching |= p[1] >= limit - 0.01 * self.spacing;
+                let Some(limit) = surface(&self.body, e, p) else { continue };
+                touching |= p[1] >= limit - reach;
                 if p[1] > limit {
                     group.push(ElementId(e));
                     goals.push([p[0], limit, p[2]]);
@@ -352,20 +354,16 @@ impl Tissue {
         }
         self.probe.group = group;
         self.probe.goals = goals;
-        // In contact: the footprint's elements now on the ball's surface (within a hundredth of a
-        // spacing).
+        // In contact: the footprint's elements now on the ball's surface.
         self.probe.contact = Some(ElementId(centre));
         self.probe.ball = Some((tip, radius));
-        let pos = self.body.positions();
+        let body = &self.body;
+        let pos = body.positions();
         for k in k0..=k1 {
             for i in i0..=i1 {
                 let e = top(i, k);
-                let Some(&p) = pos.get(e as usize) else { continue };
-                let l = across(p);
-                let l = if e == centre { l.min(0.7 * radius) } else { l };
-                if l < radius
-                    && !self.body.is_pinned(ElementId(e))
-                    && p[1] >= tip[1] - (radius * radius - l * l).sqrt() - 0.01 * self.spacing
+                if let Some(&p) = pos.get(e as usize)
+                    && surface(body, e, p).is_some_and(|limit| p[1] >= limit - reach)
                 {
                     self.probe.patch.push(ElementId(e));
                 }

@@ -28,7 +28,6 @@ use rustc_hash::FxHashMap;
 use crate::chainmail::body::{Body, FIXED, INTACT};
 use crate::chainmail::coords::clamp;
 use crate::chainmail::ids::ElementId;
-use crate::chainmail::material::Material;
 use crate::chainmail::relax::kernel::FLUSH;
 
 /// No elastic energy in this cell.
@@ -73,11 +72,10 @@ pub(crate) struct Elastic {
 /// elements beside a cut) share one.
 #[derive(Clone, Debug)]
 pub(crate) struct Stencil {
-    /// The block coupling the element's force to the displacement of its neighbour at offset
-    /// `(dx, dy, dz)`, at `(dx + 1) + 3 (dy + 1) + 9 (dz + 1)` (13: its own, the diagonal block).
-    block: [[f32; 9]; 27],
-    /// The neighbours' blocks, with their element offsets from the element (in a grid of the
-    /// body's dims): those of `block` that are not the element's own and not zero.
+    /// The diagonal block: the element's force from its own displacement.
+    diag: [f32; 9],
+    /// The neighbours' blocks (each coupling the element's force to a neighbour's displacement), with
+    /// their element offsets from the element in a grid of the body's dims; zero blocks left out.
     entries: Vec<(isize, [f32; 9])>,
 }
 
@@ -136,9 +134,19 @@ impl Body {
             && self.materials.iter().any(|m| m.poisson_ratio.is_some())
     }
 
+    /// The links' materials and breaks the elastic cells depend on, as they are now.
+    fn cells_key(&self) -> Option<(u64, u64)> {
+        Some((self.boxes_epoch, self.broken))
+    }
+
+    /// Whether the body has elastic cells, found for its links as they are now.
+    fn cells_current(&self) -> bool {
+        self.elastic.any && self.elastic.found_at == self.cells_key()
+    }
+
     /// Finds the elastic cells again if the body changed since they were found.
     pub(crate) fn refresh_elastic(&mut self) {
-        let now = Some((self.boxes_epoch, self.broken));
+        let now = self.cells_key();
         if self.elastic.found_at == now {
             return;
         }
@@ -178,12 +186,9 @@ impl Body {
                         }
                     }
                     let intact = edges.iter().all(|&l| l != usize::MAX && self.link_state[l] == INTACT);
-                    let material = match intact {
-                        true => self.materials[self.link_material[edges[0]].index()],
-                        false => Material::default(),
-                    };
-                    let class = match material.poisson_ratio {
-                        Some(nu) if intact => {
+                    let material = intact.then(|| self.materials[self.link_material[edges[0]].index()]);
+                    let class = match material.and_then(|m| m.poisson_ratio.map(|nu| (m, nu))) {
+                        Some((material, nu)) => {
                             let r = &lattice.rest;
                             // (To a tenth of a micrometre: the cells of an even grid, whose rest
                             // positions' rounding differs in the last bits, share one stiffness and
@@ -259,7 +264,7 @@ impl Body {
         pos_of: impl Fn(usize) -> [f32; 3],
     ) -> Option<[f32; 3]> {
         let el = &self.elastic;
-        if !el.any || el.found_at != Some((self.boxes_epoch, self.broken)) || self.flags[i] & FIXED != 0 {
+        if !self.cells_current() || self.flags[i] & FIXED != 0 {
             return None;
         }
         let (g, d) = match el.element[i] {
@@ -296,7 +301,7 @@ impl Body {
                 g[r] += block[r * 3] * u[0] + block[r * 3 + 1] * u[1] + block[r * 3 + 2] * u[2];
             }
         }
-        (g, st.block[13])
+        (g, st.diag)
     }
 
     /// The force that holds the elements of `set` where they are against the elastic cells, summed
@@ -304,10 +309,10 @@ impl Body {
     /// no elastic cells found for its present links and materials (before its first sweep, or after a
     /// cut until the next), or none of the set lies in one.
     pub fn elastic_force(&self, set: &[ElementId]) -> Option<[f32; 3]> {
-        let el = &self.elastic;
-        if !el.any || el.found_at != Some((self.boxes_epoch, self.broken)) {
+        if !self.cells_current() {
             return None;
         }
+        let el = &self.elastic;
         let mut f = [0.0f32; 3];
         let mut any = false;
         for &e in set {
@@ -400,7 +405,7 @@ fn stencil_of(key: &[u32; 8], stiffness: &[CellStiffness], dims: [usize; 3]) -> 
             (off, block[o])
         })
         .collect();
-    Stencil { block, entries }
+    Stencil { diag: block[13], entries }
 }
 
 /// The projected coordinate steps of an element at `p` with energy gradient `g` and diagonal block
@@ -431,7 +436,9 @@ fn project(p: [f32; 3], mut g: [f32; 3], d: [f32; 9], lo: [f32; 3], hi: [f32; 3]
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::chainmail::{BreakReason, Lattice, LinkId, Pass, RelaxBudget, RelaxRegion, Workspace};
+    use crate::chainmail::{
+        BreakReason, Lattice, LinkId, Material, Pass, RelaxBudget, RelaxRegion, Workspace,
+    };
 
     /// A 6 × 5 × 7 block of elastic cells (ν = 0.45), its base pinned, with a second material (a
     /// stiffer ν = 0.3) in one corner and a cut through three links: the shared stencils meet every
