@@ -223,15 +223,28 @@ impl Cone {
     /// Settles every element within `radius` of the seeds (and no further); returns how many this call
     /// settled. The body must have the slots, pairs and classes it had at [`Cone::start`].
     pub fn grow(&mut self, body: &Body, radius: f32) -> usize {
-        // (A lift's loop and a press's compiled apart, so that a lift's settles as it did before
-        // presses shared it.)
-        if self.down { self.grow_in::<true>(body, radius) } else { self.grow_in::<false>(body, radius) }
+        self.grow_within(body, radius, usize::MAX).0
     }
 
-    /// [`Cone::grow`]; `DOWN` is `self.down`.
+    /// [`Cone::grow`], settling no more than `budget` elements: returns how many it settled and
+    /// whether it reached `radius`. A growth cut short settles a prefix of the order a whole one
+    /// settles in (every element nearer than the next on the heap), and the next call goes on from
+    /// there.
+    pub fn grow_within(&mut self, body: &Body, radius: f32, budget: usize) -> (usize, bool) {
+        // (A lift's loop and a press's compiled apart, so that a lift's settles as it did before
+        // presses shared it.)
+        if self.down {
+            self.grow_in::<true>(body, radius, budget)
+        } else {
+            self.grow_in::<false>(body, radius, budget)
+        }
+    }
+
+    /// [`Cone::grow_within`]; `DOWN` is `self.down`.
     #[inline(always)]
-    fn grow_in<const DOWN: bool>(&mut self, body: &Body, radius: f32) -> usize {
+    fn grow_in<const DOWN: bool>(&mut self, body: &Body, radius: f32, budget: usize) -> (usize, bool) {
         let before = self.settled.len();
+        let mut short = None;
         let w = body.width;
         let (slot_nbr, slot_class, pairs) = (&body.slot_nbr[..], &body.slot_class[..], &body.pairs);
         let rest_pos = body.lattice.rest_positions();
@@ -245,6 +258,10 @@ impl Cone {
         while let Some(&Reverse(k)) = heap.peek() {
             let (du, u) = (f32::from_bits((k >> 32) as u32), k as u32 as usize);
             if du > radius {
+                break;
+            }
+            if settled.len() - before >= budget {
+                short = Some(du);
                 break;
             }
             heap.pop();
@@ -304,12 +321,20 @@ impl Cone {
                 }
             }
         }
-        self.radius = self.radius.max(radius);
-        self.settled.len() - before
+        // Cut short, every element nearer than the heap's least is settled (an element still to
+        // settle is at least that far: Dijkstra's order), and no other.
+        let reached = match short {
+            None => radius,
+            Some(du) if du > 0.0 => f32::from_bits(du.to_bits() - 1),
+            Some(_) => f32::NEG_INFINITY,
+        };
+        self.radius = self.radius.max(reached);
+        (self.settled.len() - before, short.is_none())
     }
 
     /// The least distance from the seeds to `e`, if `e` is settled (reachable, and within the radius
-    /// grown to).
+    /// grown to; after a growth cut short by its budget, the elements it settled at its last distance
+    /// answer once the next growth has gone past it).
     pub fn distance(&self, e: ElementId) -> Option<f32> {
         let d = *self.dist.get(e.index())?;
         (d <= self.radius && d.is_finite()).then_some(d)
@@ -370,7 +395,18 @@ pub struct ConeLift {
     /// A press's cone holds the least distances (grown by radius), not a search that stopped where
     /// the tissue need not move: it may be kept for the next press.
     complete: bool,
+    /// Most elements a lift settles in one call (`0`: [`LIFT_GROWTH`]).
+    pub(crate) growth: usize,
 }
+
+/// Most elements a lift's cone settles in one call of `Body::lift_by_cone`: a lift that needs more
+/// waits, its jaws where they are, and goes on growing at the next call. The first lift after a cut
+/// starts the cone again, and a taut tent needs it grown over its whole area at once: 51 169 elements,
+/// 7.6 ms, in the careful exercise's final lift at 512 x 384, 12 241 at 256 x 192 (a cone settles
+/// about 150 ns an element there). With this budget that lift waits 12 steps (3 at 256 x 192; none
+/// below 160 x 120), each under a millisecond, while the hand rises 0.16 mm; then the jaws catch up
+/// in one step.
+pub(crate) const LIFT_GROWTH: usize = 4096;
 
 impl ConeLift {
     /// No cone yet.
@@ -545,7 +581,8 @@ impl Body {
     /// workspace's moved list; those that rose with the seeds, straining nothing, counted as
     /// [`Workspace::raised_unlisted`]) and the share of the rise allowed. `None`, with nothing moved,
     /// where the cone does not apply: the seeds do not hang from the first by their offsets, the
-    /// move is not a rise, or a seed is not held (the chain reaction then moves the tissue).
+    /// move is not a rise, or a seed is not held (the chain reaction then moves the tissue). `(0, 1)`,
+    /// with nothing moved, while the cone grows toward what the rise needs ([`LIFT_GROWTH`]).
     ///
     /// Every element the cone has settled is looked at, in blocks of [`BLOCK`] in memory order: the
     /// taut inside of a tent is written every step, as the chain reaction's raise wrote it, but the
@@ -584,8 +621,15 @@ impl Body {
         lift.fit(self, seeds, offs, top);
         let rest = &self.lattice.rest_positions()[..n];
         let mut all = true;
+        let mut budget = if lift.growth == 0 { LIFT_GROWTH } else { lift.growth };
         while let Some(r) = lift.reach(&self.pos, rest, a1, all) {
-            lift.cone.grow(self, r + dz);
+            let (settled, reached) = lift.cone.grow_within(self, r + dz, budget);
+            if !reached {
+                // The jaws wait for the cone (see `LIFT_GROWTH`): nothing moves this time.
+                lift.scan(&self.flags, rest);
+                return Some((0, 1.0));
+            }
+            budget -= settled;
             all = false;
         }
         lift.scan(&self.flags, rest);
@@ -1127,6 +1171,58 @@ mod tests {
             assert_eq!(total, n - plain.iter().filter(|d| d.is_infinite()).count());
             let whole: Vec<_> = cone.settled().collect();
             assert_eq!(pieces.settled().collect::<Vec<_>>(), whole, "grown in pieces");
+        }
+    }
+
+    /// A growth cut short by a budget (`Cone::grow_within`, a lift's growth spread over steps) settles
+    /// a prefix of the whole growth's order, answers distances for what it settled nearer than the
+    /// last it settled and for nothing it did not settle, and, called again until it reaches the radius, settles the same elements in the same order with
+    /// the same distances as one growth.
+    #[test]
+    fn a_growth_cut_short_goes_on_where_it_stopped() {
+        let body = meninges([40, 30]);
+        let n = body.element_count();
+        let seeds: Vec<ElementId> =
+            [n / 4 + 20, n / 4 + 21, n / 4 + 60].into_iter().map(|e| ElementId(e as u32)).collect();
+        let plain = distances_plain(&body, &seeds);
+        let far = plain.iter().copied().filter(|d| d.is_finite()).fold(0.0f32, f32::max);
+        let mut whole = Cone::new();
+        whole.start(&body, &seeds);
+        whole.grow(&body, far * 0.6);
+        let order: Vec<ElementId> = whole.settled().collect();
+        assert!(order.len() > 500, "{} settled", order.len());
+        for budget in [1, 7, 100, 499] {
+            let mut cone = Cone::new();
+            cone.start(&body, &seeds);
+            let mut calls = 0;
+            loop {
+                let (settled, reached) = cone.grow_within(&body, far * 0.6, budget);
+                calls += 1;
+                assert!(settled <= budget, "budget {budget}: {settled} settled in one call");
+                let so_far: Vec<ElementId> = cone.settled().collect();
+                assert_eq!(so_far[..], order[..so_far.len()], "budget {budget}: a prefix of the order");
+                let mut is_settled = vec![false; n];
+                for e in &so_far {
+                    is_settled[e.index()] = true;
+                }
+                // (Elements as far as the last settled may wait on the heap beside it: those settled
+                // at that distance answer at the next call.)
+                let last = so_far.last().map_or(f32::NEG_INFINITY, |e| plain[e.index()]);
+                for (e, &d) in plain.iter().enumerate() {
+                    let got = cone.distance(ElementId(e as u32));
+                    if is_settled[e] && (d < last || reached) {
+                        assert_eq!(got, Some(d), "budget {budget}, call {calls}: element {e}");
+                    } else if !is_settled[e] {
+                        assert_eq!(got, None, "budget {budget}, call {calls}: element {e}");
+                    }
+                }
+                if reached {
+                    break;
+                }
+                assert_eq!(settled, budget, "cut short only by the budget");
+            }
+            assert_eq!(cone.settled().collect::<Vec<_>>(), order, "budget {budget}");
+            assert!(calls >= order.len().div_ceil(budget), "budget {budget}: {calls} calls");
         }
     }
 
