@@ -409,6 +409,84 @@ mod tests {
         assert!(rose > 10_000, "{rose} elements lifted");
     }
 
+    /// A lift the pins stop grows its cone no further than the pins it has found allow, and still
+    /// stops where the chain reaction does: through the careful durotomy's fold (the flap pulled up
+    /// and over while the sheet's pinned edges hold it), while the fold stays blocked the cone settles
+    /// nothing more (at 128 x 96 it grew in 6 of 981 such steps before, a ring each time, over
+    /// 4 000 elements a ring at 256 x 192); and at 64 x 48 a copy of the tissue pulled along the normal
+    /// by Gibson's lists (`no_cone`) allows the same share and leaves every element where the cone
+    /// leaves it.
+    #[test]
+    fn a_lift_the_pins_stop_grows_nothing_and_stops_where_the_chain_reaction_does() {
+        use crate::chainmail::Pass;
+
+        for (res, compare) in [([128, 96], false), ([64, 48], true)] {
+            let mut scene =
+                Scene::from_str(include_str!("../../scenes/durotomy.ron"), "durotomy.ron").expect("scene");
+            if let SceneTissue::Layers(l) = &mut scene.tissue {
+                l.resolution = res;
+            }
+            let script = Script::from_str(
+                include_str!("../../scenes/scripts/durotomy_careful.ron"),
+                "durotomy_careful.ron",
+            )
+            .expect("script");
+            let mut world = scene.build_world(false).expect("world");
+            let mut player = Player::new(script.0);
+            let (mut compared, mut blocked, mut grew_blocked) = (0, 0, 0);
+            let mut last: Option<usize> = None;
+            loop {
+                player.feed(&mut world);
+                if player.finished() && world.pending().is_empty() {
+                    break;
+                }
+                world.step();
+                let settled = world.tissue().jaws.cone.cone().settled().len();
+                let was = last.replace(settled);
+                let Some(e) = world.instrument().grasped else { continue };
+                if world.step_count() < 3_100 {
+                    continue;
+                }
+                if world.last_step().grasp_fraction == 0.0
+                    && world.tissue().jaws.blocked[super::pass_index(Pass::Normal)].is_some()
+                {
+                    blocked += 1;
+                    grew_blocked += usize::from(was.is_some_and(|w| w != settled));
+                }
+                if !compare || !world.step_count().is_multiple_of(10) {
+                    continue;
+                }
+                let target = world.instrument().target;
+                let mut cone = world.tissue().clone();
+                cone.jaws.blocked = [None; 3];
+                let mut chain = cone.clone();
+                chain.jaws.no_cone = true;
+                let moved = [&mut cone, &mut chain].map(|t| t.pull_pass(e, target, Pass::Normal));
+                let step = world.step_count();
+                assert_eq!(moved[0].1, moved[1].1, "{res:?}, step {step}: the share of the rise allowed");
+                let (a, b) = (cone.body().positions(), chain.body().positions());
+                for j in 0..a.len() {
+                    assert!(
+                        (b[j][2] - a[j][2]).abs() <= 1e-7,
+                        "{res:?}, step {step}: element {j} at {} by the chain reaction, {} by the cone",
+                        b[j][2],
+                        a[j][2]
+                    );
+                }
+                compared += 1;
+            }
+            println!(
+                "{res:?}: {compared} lifts compared, {blocked} blocked steps, the cone grew in {grew_blocked}"
+            );
+            assert!(!compare || compared >= 50, "{res:?}: {compared} lifts compared");
+            assert!(blocked >= 300, "{res:?}: {blocked} blocked steps");
+            assert_eq!(
+                grew_blocked, 0,
+                "{res:?}: the cone grew in {grew_blocked} of {blocked} blocked steps"
+            );
+        }
+    }
+
     /// Every bound along the normal is a difference constraint, so the least distance `D` from the held
     /// elements over them (an edge from an element to its neighbour weighs the upper bound on the
     /// element's height over the neighbour's) bounds every state below: `z >= A - D`, `A` the held
