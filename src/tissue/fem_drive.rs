@@ -78,7 +78,7 @@ impl FemDrive {
         &mut self,
         e: ElementId,
         displacement: [f32; 3],
-        mut out: impl FnMut(ElementId, [f32; 3]),
+        out: impl FnMut(ElementId, [f32; 3]),
     ) -> Result<(), FemError> {
         let d = displacement.map(f64::from);
         let forces = self.model.impose(&[(NodeId(e.0), d)], &mut self.u)?;
@@ -87,12 +87,45 @@ impl FemDrive {
             let u = dynamic.step(&[(NodeId(e.0), forces[0])])?;
             self.u.copy_from_slice(u);
         }
+        self.write_surface(out);
+        Ok(())
+    }
+
+    /// Imposes a displacement (metres) on each of several surface nodes at once, as a ball does on
+    /// the top face it presses, and returns the force that imposes each (newtons, on the node). The
+    /// reaction is their sum. Surface displacements are read with [`FemDrive::displacement`] and
+    /// written by [`FemDrive::write_surface`]. A dynamic block takes its time step only with `step`
+    /// (a press tries several sets of nodes in a step and keeps the last).
+    pub fn impose_many(
+        &mut self,
+        imposed: &[(ElementId, [f32; 3])],
+        step: bool,
+    ) -> Result<Vec<[f32; 3]>, FemError> {
+        let nodes: Vec<(NodeId, [f64; 3])> =
+            imposed.iter().map(|&(e, d)| (NodeId(e.0), d.map(f64::from))).collect();
+        let forces = self.model.impose(&nodes, &mut self.u)?;
+        let total = forces.iter().fold([0.0f64; 3], |t, f| [t[0] + f[0], t[1] + f[1], t[2] + f[2]]);
+        self.reaction = total.map(|x| -x as f32);
+        if step && let Some(dynamic) = &mut self.dynamic {
+            let loads: Vec<(NodeId, [f64; 3])> = nodes.iter().zip(&forces).map(|(n, f)| (n.0, *f)).collect();
+            let u = dynamic.step(&loads)?;
+            self.u.copy_from_slice(u);
+        }
+        Ok(forces.iter().map(|f| f.map(|x| x as f32)).collect())
+    }
+
+    /// The displacement of element `e`'s surface node now, metres (`None` for an interior node).
+    pub fn displacement(&self, e: ElementId) -> Option<[f32; 3]> {
+        self.model.displacement(&self.u, NodeId(e.0)).map(|v| v.map(|x| x as f32))
+    }
+
+    /// Every surface node's displacement through `out(element, displacement)`.
+    pub fn write_surface(&self, mut out: impl FnMut(ElementId, [f32; 3])) {
         for &n in self.model.surface_nodes() {
             if let Some(v) = self.model.displacement(&self.u, n) {
                 out(ElementId(n.0), v.map(|x| x as f32));
             }
         }
-        Ok(())
     }
 
     /// The force the block exerts on the instrument driving its node, newtons (zero when let go).
