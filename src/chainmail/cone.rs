@@ -403,9 +403,9 @@ pub struct ConeLift {
 /// waits, its jaws where they are, and goes on growing at the next call. The first lift after a cut
 /// starts the cone again, and a taut tent needs it grown over its whole area at once: 51 169 elements,
 /// 7.6 ms, in the careful exercise's final lift at 512 x 384, 12 241 at 256 x 192 (a cone settles
-/// about 150 ns an element there). With this budget that lift waits 12 steps (3 at 256 x 192; none
-/// below 160 x 120), each under a millisecond, while the hand rises 0.16 mm; then the jaws catch up
-/// in one step.
+/// about 150 ns an element there). With this budget that lift waits 14 steps (3 at 256 x 192; none
+/// at 128 x 96, whose cone is 2 862), each under a millisecond, while the hand rises 0.19 mm; then
+/// the jaws catch up in one step.
 pub(crate) const LIFT_GROWTH: usize = 4096;
 
 impl ConeLift {
@@ -683,7 +683,6 @@ impl Body {
             budget -= settled;
             all = false;
         }
-        lift.scan(&self.flags, rest);
         let fraction = if a1 < asked { (a1 - a0) / (asked - a0) } else { 1.0 };
         let goal = a1 - top;
         let dz = goal - c;

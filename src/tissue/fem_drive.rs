@@ -3,7 +3,7 @@
 //! displacements on surface nodes, and the condensed, pre-inverted model gives the surface's answer by
 //! selective matrix-vector multiplication. Cutting is refused: condensation assumes a fixed topology.
 
-use crate::chainmail::ElementId;
+use crate::chainmail::{Body, ElementId};
 use crate::fem::{
     Base, DynamicModel, DynamicParams, ElasticMaterial, FemError, FemModel, LoadOptions, NodeId, Split,
     Supports, TetMesh,
@@ -72,14 +72,9 @@ impl FemDrive {
         Ok(Self { model, dynamic, u, reaction: [0.0; 3] })
     }
 
-    /// Imposes `displacement` (metres) on the surface node of element `e` and returns every surface
-    /// node's displacement through `out(element, displacement)`.
-    pub fn impose(
-        &mut self,
-        e: ElementId,
-        displacement: [f32; 3],
-        out: impl FnMut(ElementId, [f32; 3]),
-    ) -> Result<(), FemError> {
+    /// Imposes `displacement` (metres) on the surface node of element `e` and writes every surface
+    /// node's position into `body`; returns how many it wrote.
+    pub fn impose(&mut self, e: ElementId, displacement: [f32; 3], body: &mut Body) -> Result<u32, FemError> {
         let d = displacement.map(f64::from);
         let forces = self.model.impose(&[(NodeId(e.0), d)], &mut self.u)?;
         self.reaction = forces.first().map_or([0.0; 3], |f| f.map(|x| -x as f32));
@@ -87,14 +82,13 @@ impl FemDrive {
             let u = dynamic.step(&[(NodeId(e.0), forces[0])])?;
             self.u.copy_from_slice(u);
         }
-        self.write_surface(out);
-        Ok(())
+        Ok(self.write_into(body))
     }
 
     /// Imposes a displacement (metres) on each of several surface nodes at once, as a ball does on
     /// the top face it presses, and returns the force that imposes each (newtons, on the node). The
     /// reaction is their sum. Surface displacements are read with [`FemDrive::displacement`] and
-    /// written by [`FemDrive::write_surface`]. A dynamic block takes its time step only with `step`
+    /// written by [`FemDrive::write_into`]. A dynamic block takes its time step only with `step`
     /// (a press tries several sets of nodes in a step and keeps the last).
     pub fn impose_many(
         &mut self,
@@ -114,18 +108,30 @@ impl FemDrive {
         Ok(forces.iter().map(|f| f.map(|x| x as f32)).collect())
     }
 
+    /// Whether the block integrates in time (its dynamic mode).
+    pub fn is_dynamic(&self) -> bool {
+        self.dynamic.is_some()
+    }
+
     /// The displacement of element `e`'s surface node now, metres (`None` for an interior node).
     pub fn displacement(&self, e: ElementId) -> Option<[f32; 3]> {
         self.model.displacement(&self.u, NodeId(e.0)).map(|v| v.map(|x| x as f32))
     }
 
-    /// Every surface node's displacement through `out(element, displacement)`.
-    pub fn write_surface(&self, mut out: impl FnMut(ElementId, [f32; 3])) {
+    /// Writes every surface node's position (its rest position plus its displacement) into `body`;
+    /// returns how many it wrote.
+    pub fn write_into(&self, body: &mut Body) -> u32 {
+        let mut written = 0;
         for &n in self.model.surface_nodes() {
-            if let Some(v) = self.model.displacement(&self.u, n) {
-                out(ElementId(n.0), v.map(|x| x as f32));
+            let e = ElementId(n.0);
+            if let (Some(v), Some(&r)) =
+                (self.model.displacement(&self.u, n), body.lattice().rest_positions().get(e.index()))
+            {
+                let _ = body.set_position(e, [r[0] + v[0] as f32, r[1] + v[1] as f32, r[2] + v[2] as f32]);
+                written += 1;
             }
         }
+        written
     }
 
     /// The force the block exerts on the instrument driving its node, newtons (zero when let go).
@@ -133,15 +139,14 @@ impl FemDrive {
         self.reaction
     }
 
-    /// Lets go: no imposed displacement, the block returns to rest.
-    pub fn release(&mut self, mut out: impl FnMut(ElementId, [f32; 3])) {
+    /// Lets go: no imposed displacement, the block returns to rest (its surface written into `body`;
+    /// returns how many nodes).
+    pub fn release(&mut self, body: &mut Body) -> u32 {
         self.u.fill(0.0);
         self.reaction = [0.0; 3];
         if let Some(d) = &mut self.dynamic {
             d.reset();
         }
-        for &n in self.model.surface_nodes() {
-            out(ElementId(n.0), [0.0; 3]);
-        }
+        self.write_into(body)
     }
 }

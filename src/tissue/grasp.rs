@@ -270,19 +270,23 @@ mod tests {
     /// The careful meninges exercise at `res`, its blocked lifts along the normal kept while the
     /// region relaxes (`strict` false) or searched again after every relaxation (`strict` true).
     fn careful(res: [u32; 2], strict: bool) -> (World, Player) {
-        let mut scene =
-            Scene::from_str(include_str!("../../scenes/meninges.ron"), "meninges.ron").expect("scene");
+        let (mut world, player) = played(
+            include_str!("../../scenes/meninges.ron"),
+            include_str!("../../scenes/scripts/meninges_careful.ron"),
+            res,
+        );
+        world.tissue_mut().jaws.strict = strict;
+        (world, player)
+    }
+
+    /// A layered scene at `res` (its text), and a player of a script (its text).
+    fn played(scene: &str, script: &str, res: [u32; 2]) -> (World, Player) {
+        let mut scene = Scene::from_str(scene, "scene.ron").expect("scene");
         if let SceneTissue::Layers(l) = &mut scene.tissue {
             l.resolution = res;
         }
-        let script = Script::from_str(
-            include_str!("../../scenes/scripts/meninges_careful.ron"),
-            "meninges_careful.ron",
-        )
-        .expect("script");
-        let mut world = scene.build_world(false).expect("world");
-        world.tissue_mut().jaws.strict = strict;
-        (world, Player::new(script.0))
+        let script = Script::from_str(script, "script.ron").expect("script");
+        (scene.build_world(false).expect("world"), Player::new(script.0))
     }
 
     /// The careful exercise's final lift reaches what the pins allow while the tent still relaxes:
@@ -421,18 +425,11 @@ mod tests {
         use crate::chainmail::Pass;
 
         for (res, compare) in [([128, 96], false), ([64, 48], true)] {
-            let mut scene =
-                Scene::from_str(include_str!("../../scenes/durotomy.ron"), "durotomy.ron").expect("scene");
-            if let SceneTissue::Layers(l) = &mut scene.tissue {
-                l.resolution = res;
-            }
-            let script = Script::from_str(
+            let (mut world, mut player) = played(
+                include_str!("../../scenes/durotomy.ron"),
                 include_str!("../../scenes/scripts/durotomy_careful.ron"),
-                "durotomy_careful.ron",
-            )
-            .expect("script");
-            let mut world = scene.build_world(false).expect("world");
-            let mut player = Player::new(script.0);
+                res,
+            );
             let (mut compared, mut blocked, mut grew_blocked) = (0, 0, 0);
             let mut last: Option<usize> = None;
             loop {

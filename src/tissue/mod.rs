@@ -519,11 +519,7 @@ impl Tissue {
         // Out-of-range ids are ignored: the instrument only holds ids this tissue issued.
         let _ = self.body.set_held(e, held);
         if !held && let Model::Fem(fem) = &mut self.model {
-            let body = &mut self.body;
-            fem.release(|n, _| {
-                let r = body.lattice().rest_positions()[n.index()];
-                let _ = body.set_position(n, r);
-            });
+            fem.release(&mut self.body);
         }
     }
 
@@ -560,19 +556,15 @@ impl Tissue {
                 (d.moved, d.fraction)
             }
             Model::Fem(fem) => {
-                let body = &mut self.body;
-                let r = body.lattice().rest_positions()[e.index()];
+                let r = self.body.lattice().rest_positions()[e.index()];
                 let d = [goal[0] - r[0], goal[1] - r[1], goal[2] - r[2]];
-                let mut moved = 0;
-                let result = fem.impose(e, d, |n, u| {
-                    let r = body.lattice().rest_positions()[n.index()];
-                    let _ = body.set_position(n, [r[0] + u[0], r[1] + u[1], r[2] + u[2]]);
-                    moved += 1;
-                });
-                if let Err(err) = result {
-                    self.notice = Some(err.to_string());
+                match fem.impose(e, d, &mut self.body) {
+                    Ok(moved) => (moved, 1.0),
+                    Err(err) => {
+                        self.notice = Some(err.to_string());
+                        (0, 1.0)
+                    }
                 }
-                (moved, 1.0)
             }
         }
     }

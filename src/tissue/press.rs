@@ -44,6 +44,31 @@ struct TopWindow {
     k: (usize, usize),
     centre: u32,
     across: f32,
+    /// The ball.
+    tip: [f32; 3],
+    radius: f32,
+}
+
+impl TopWindow {
+    /// The window's elements, row by row.
+    fn elements(&self) -> impl Iterator<Item = u32> + '_ {
+        let (nx, ny) = (self.nx, self.ny);
+        (self.k.0..=self.k.1)
+            .flat_map(move |k| (self.i.0..=self.i.1).map(move |i| (i + nx * ((ny - 1) + ny * k)) as u32))
+    }
+
+    /// How far `p` lies from the ball's centre across the face.
+    fn across(&self, p: [f32; 3]) -> f32 {
+        ((self.tip[0] - p[0]).powi(2) + (self.tip[2] - p[2]).powi(2)).sqrt()
+    }
+
+    /// The ball's lower surface over element `e` at `p`, `None` beyond its radius (the centre's taken
+    /// within the ball whatever its distance: the ball may touch the face between elements).
+    fn surface(&self, e: u32, p: [f32; 3]) -> Option<f32> {
+        let (l, r) = (self.across(p), self.radius);
+        let l = if e == self.centre { l.min(0.7 * r) } else { l };
+        (l < r).then(|| self.tip[1] - (r * r - l * l).sqrt())
+    }
 }
 
 /// The probe's state between steps.
@@ -76,6 +101,10 @@ pub(crate) struct Probe {
     /// A volume's press: the top face's elements the ball moves and where to (scratch).
     group: Vec<ElementId>,
     goals: Vec<[f32; 3]>,
+    /// A finite-element volume's press: the top face's nodes under the ball with its surface over
+    /// each, and those held there with their displacements (scratch).
+    footprint: Vec<(u32, f32)>,
+    imposed: Vec<(ElementId, [f32; 3])>,
 }
 
 impl Probe {
@@ -297,20 +326,14 @@ impl Tissue {
     fn press_volume(&mut self, tip: [f32; 3], radius: f32) -> u32 {
         self.probe.ball = None;
         let Some(w) = self.top_window(tip, radius) else { return self.push_one(tip, radius) };
-        let TopWindow { nx, ny, i: (i0, i1), k: (k0, k1), centre, .. } = w;
         if w.across >= radius + self.spacing {
             return 0;
         }
-        let top = |i: usize, k: usize| (i + nx * ((ny - 1) + ny * k)) as u32;
         let pos = self.body.positions();
-        let across = |p: [f32; 3]| ((tip[0] - p[0]).powi(2) + (tip[2] - p[2]).powi(2)).sqrt();
-        // The ball's lower surface over a free element of its footprint at `p` (the centre's taken
-        // within the ball whatever its distance: the ball may touch the face between elements).
-        let surface = move |body: &crate::chainmail::Body, e: u32, p: [f32; 3]| {
-            let l = across(p);
-            let l = if e == centre { l.min(0.7 * radius) } else { l };
+        // The ball's lower surface over a free element of its footprint.
+        let surface = |body: &crate::chainmail::Body, e: u32, p: [f32; 3]| {
             let free = !(body.is_pinned(ElementId(e)) || body.is_held(ElementId(e)));
-            (l < radius && free).then(|| tip[1] - (radius * radius - l * l).sqrt())
+            free.then(|| w.surface(e, p)).flatten()
         };
         // In contact: within a hundredth of a spacing of it.
         let reach = 0.01 * self.spacing;
@@ -319,16 +342,13 @@ impl Tissue {
         goals.clear();
         patch.clear();
         let mut touching = false;
-        for k in k0..=k1 {
-            for i in i0..=i1 {
-                let e = top(i, k);
-                let Some(&p) = pos.get(e as usize) else { continue };
-                let Some(limit) = surface(&self.body, e, p) else { continue };
-                touching |= p[1] >= limit - reach;
-                if p[1] > limit {
-                    group.push(ElementId(e));
-                    goals.push([p[0], limit, p[2]]);
-                }
+        for e in w.elements() {
+            let Some(&p) = pos.get(e as usize) else { continue };
+            let Some(limit) = surface(&self.body, e, p) else { continue };
+            touching |= p[1] >= limit - reach;
+            if p[1] > limit {
+                group.push(ElementId(e));
+                goals.push([p[0], limit, p[2]]);
             }
         }
         if !touching {
@@ -345,18 +365,15 @@ impl Tissue {
         self.probe.group = group;
         self.probe.goals = goals;
         // In contact: the footprint's elements now on the ball's surface.
-        self.probe.contact = Some(ElementId(centre));
+        self.probe.contact = Some(ElementId(w.centre));
         self.probe.ball = Some((tip, radius));
         let body = &self.body;
         let pos = body.positions();
-        for k in k0..=k1 {
-            for i in i0..=i1 {
-                let e = top(i, k);
-                if let Some(&p) = pos.get(e as usize)
-                    && surface(body, e, p).is_some_and(|limit| p[1] >= limit - reach)
-                {
-                    self.probe.patch.push(ElementId(e));
-                }
+        for e in w.elements() {
+            if let Some(&p) = pos.get(e as usize)
+                && surface(body, e, p).is_some_and(|limit| p[1] >= limit - reach)
+            {
+                self.probe.patch.push(ElementId(e));
             }
         }
         moved
@@ -379,21 +396,17 @@ impl Tissue {
             (clip(a), clip(b))
         };
         let (i, k) = (window(tip[0], r0[0], dx, nx), window(tip[2], r0[2], dz, nz));
+        let mut w = TopWindow { nx, ny, i, k, centre: 0, across: f32::INFINITY, tip, radius };
         let pos = self.body.positions();
         let mut centre: Option<(u32, f32)> = None;
-        for kk in k.0..=k.1 {
-            for ii in i.0..=i.1 {
-                let e = (ii + nx * ((ny - 1) + ny * kk)) as u32;
-                let d = pos
-                    .get(e as usize)
-                    .map_or(f32::INFINITY, |p| ((tip[0] - p[0]).powi(2) + (tip[2] - p[2]).powi(2)).sqrt());
-                if centre.is_none_or(|(_, c)| d < c) {
-                    centre = Some((e, d));
-                }
+        for e in w.elements() {
+            let d = pos.get(e as usize).map_or(f32::INFINITY, |&p| w.across(p));
+            if centre.is_none_or(|(_, c)| d < c) {
+                centre = Some((e, d));
             }
         }
-        let (centre, across) = centre?;
-        Some(TopWindow { nx, ny, i, k, centre, across })
+        (w.centre, w.across) = centre?;
+        Some(w)
     }
 
     /// The ball on a finite-element volume: every node of the top face it meets is held on the ball's
@@ -407,78 +420,54 @@ impl Tissue {
         const ROUNDS: usize = 8;
         self.probe.ball = None;
         let Some(w) = self.top_window(tip, radius) else { return self.push_one(tip, radius) };
-        let TopWindow { nx, ny, i: (i0, i1), k: (k0, k1), centre, .. } = w;
         let reach = 0.01 * self.spacing;
-        let rest = self.body.lattice().rest_positions();
-        let pos = self.body.positions();
+        let (rest, pos) = (self.body.lattice().rest_positions(), self.body.positions());
         let Model::Fem(fem) = &mut self.model else { return 0 };
-        // The ball's lower surface over a node at `p` across the face (the centre's taken within the
-        // ball whatever its distance, as on a ChainMail volume).
-        let surface = |e: u32, p: [f32; 3]| {
-            let l = ((tip[0] - p[0]).powi(2) + (tip[2] - p[2]).powi(2)).sqrt();
-            let l = if e == centre { l.min(0.7 * radius) } else { l };
-            (l < radius).then(|| tip[1] - (radius * radius - l * l).sqrt())
-        };
-        let mut footprint: Vec<(u32, f32)> = Vec::new();
+        let Probe { footprint, imposed, last, .. } = &mut self.probe;
+        // The nodes under the ball and its surface over each; those it meets now (in contact, or
+        // inside it) are held there.
+        footprint.clear();
+        imposed.clear();
         if w.across < radius + self.spacing {
-            for k in k0..=k1 {
-                for i in i0..=i1 {
-                    let e = (i + nx * ((ny - 1) + ny * k)) as u32;
-                    if let Some(&p) = pos.get(e as usize)
-                        && let Some(limit) = surface(e, p)
-                    {
-                        footprint.push((e, limit));
-                    }
+            for e in w.elements() {
+                if let Some(&p) = pos.get(e as usize)
+                    && let Some(limit) = w.surface(e, p)
+                {
+                    footprint.push((e, limit));
                 }
             }
         }
-        let at = |e: u32, limit: f32, d: [f32; 3]| {
-            let r = rest[e as usize];
-            (ElementId(e), [d[0], limit - r[1], d[2]])
-        };
-        // What the ball meets now: in contact, or inside it.
-        let mut imposed: Vec<(ElementId, [f32; 3])> = footprint
-            .iter()
-            .filter(|&&(e, limit)| pos[e as usize][1] >= limit - reach)
-            .map(|&(e, limit)| {
-                let (p, r) = (pos[e as usize], rest[e as usize]);
-                at(e, limit, [p[0] - r[0], p[1] - r[1], p[2] - r[2]])
-            })
-            .collect();
-        let was_pressing = !self.probe.patch.is_empty() || !self.probe.last.is_empty();
-        self.probe.patch.clear();
-        if imposed.is_empty() {
-            if was_pressing {
-                // Let go: the block goes back to rest.
-                let body = &mut self.body;
-                fem.release(|n, _| {
-                    let r = body.lattice().rest_positions()[n.index()];
-                    let _ = body.set_position(n, r);
-                });
-                return body.element_count() as u32;
+        let at = |e: u32, limit: f32, d: [f32; 3]| (ElementId(e), [d[0], limit - rest[e as usize][1], d[2]]);
+        for &(e, limit) in footprint.iter() {
+            let (p, r) = (pos[e as usize], rest[e as usize]);
+            if p[1] >= limit - reach {
+                imposed.push(at(e, limit, [p[0] - r[0], p[1] - r[1], p[2] - r[2]]));
             }
-            return 0;
+        }
+        if imposed.is_empty() && last.is_empty() {
+            return 0; // not pressing, and was not
         }
         let mut error = None;
-        for round in 0..ROUNDS {
-            let last = round + 1 == ROUNDS;
-            let forces = match fem.impose_many(&imposed, last) {
+        // Whether the last solve was of the set now held.
+        let mut solved = false;
+        for _ in 0..ROUNDS {
+            if imposed.is_empty() {
+                break;
+            }
+            let forces = match fem.impose_many(imposed, false) {
                 Ok(f) => f,
                 Err(e) => {
                     error = Some(e.to_string());
                     break;
                 }
             };
-            if last {
-                break;
-            }
             // A ball pushes: what it would have to pull up is let go.
             let before = imposed.len();
             let mut kept = forces.iter().map(|f| f[1] <= 0.0);
             imposed.retain(|_| kept.next().unwrap_or(false));
-            let mut changed = imposed.len() != before;
+            solved = imposed.len() == before;
             // What the dent brings into the ball joins.
-            for &(e, limit) in &footprint {
+            for &(e, limit) in footprint.iter() {
                 if imposed.iter().any(|&(n, _)| n.0 == e) {
                     continue;
                 }
@@ -486,40 +475,29 @@ impl Tissue {
                     && rest[e as usize][1] + d[1] > limit + reach
                 {
                     imposed.push(at(e, limit, d));
-                    changed = true;
+                    solved = false;
                 }
             }
-            if imposed.is_empty() {
+            if solved {
                 break;
             }
-            if !changed {
-                // Settled: the last round is the one kept (and steps a dynamic block).
-                if let Err(e) = fem.impose_many(&imposed, true) {
-                    error = Some(e.to_string());
-                }
-                break;
-            }
+        }
+        if imposed.is_empty() {
+            // Let go: the block goes back to rest.
+            return fem.release(&mut self.body);
+        }
+        // The set held, solved (again, where the rounds ended on a change) and a dynamic block's step.
+        if (!solved || fem.is_dynamic())
+            && let Err(e) = fem.impose_many(imposed, true)
+        {
+            error = Some(e.to_string());
         }
         if let Some(e) = error {
             self.notice = Some(e);
         }
-        let body = &mut self.body;
-        let mut moved = 0;
-        if imposed.is_empty() {
-            fem.release(|n, _| {
-                let r = body.lattice().rest_positions()[n.index()];
-                let _ = body.set_position(n, r);
-            });
-            return body.element_count() as u32;
-        }
-        fem.write_surface(|n, u| {
-            let r = body.lattice().rest_positions()[n.index()];
-            let _ = body.set_position(n, [r[0] + u[0], r[1] + u[1], r[2] + u[2]]);
-            moved += 1;
-        });
-        self.probe.contact = Some(ElementId(centre));
-        self.probe.patch.extend(imposed.iter().map(|&(e, _)| e));
-        moved
+        self.probe.contact = Some(ElementId(w.centre));
+        self.probe.patch.extend(self.probe.imposed.iter().map(|&(e, _)| e));
+        fem.write_into(&mut self.body)
     }
 
     /// A ball pressing the one element nearest its centre by the chain reaction (a lattice that is
