@@ -62,7 +62,8 @@ pub mod web;
 /// 610 MB. The arrays the steps write are written once when a body is built (`chainmail::touched`):
 /// otherwise the first step to reach a huge page stops to have it zeroed and mapped (4 to 22 ms in the
 /// first steps at 512 × 384). Declared here, so that every binary, test and bench that links the library
-/// allocates the same way. (The browser build keeps Rust's.)
-#[cfg(not(target_arch = "wasm32"))]
+/// allocates the same way. (The browser build keeps Rust's, and so does the `count-allocations` feature,
+/// under which the test that counts a step's allocations installs its counting allocator.)
+#[cfg(not(any(target_arch = "wasm32", feature = "count-allocations")))]
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;

@@ -3,8 +3,8 @@
 //! mode settling on the static answer, and refusal of bad input with an error rather than a panic.
 
 use dissect::fem::{
-    Base, DynamicModel, DynamicParams, ElasticMaterial, Face, FemError, FemModel, LoadOptions, NodeId, Split,
-    Supports, TetId, TetMesh, pressure_loads,
+    Base, DynamicModel, DynamicParams, ElasticMaterial, Face, FemError, FemModel, ImposeWork, LoadOptions,
+    NodeId, Split, Supports, TetId, TetMesh, pressure_loads,
 };
 
 fn load(dims: [usize; 3], h: f64, split: Split, mat: ElasticMaterial, base: Base) -> FemModel {
@@ -142,6 +142,61 @@ fn imposed_displacement_moves_the_node_exactly() {
         let a = model.displacement(&u, n).expect("surface");
         for k in 0..3 {
             assert!((a[k] - full[n.index()][k]).abs() <= 1e-6 * 0.002);
+        }
+    }
+}
+
+/// One scratch reused over imposed sets that grow and shrink (as a probe's footprint does step after
+/// step) gives, bit for bit, what a fresh scratch gives, and the forces agree with a plain dense
+/// Cholesky solve of the same block (nalgebra) to round-off.
+#[test]
+fn a_reused_impose_scratch_answers_as_a_fresh_one_and_as_a_dense_solve() {
+    let model = load([6, 6, 6], 0.005, Split::Six, ElasticMaterial::default(), Base::Clamped);
+    let top: Vec<NodeId> = [(2, 2), (3, 3), (2, 3), (3, 2), (4, 3), (1, 1)]
+        .map(|(i, k)| model.mesh().node_at(i, 5, k).expect("top"))
+        .into();
+    let mut work = ImposeWork::default();
+    let (mut u, mut fresh_u) = (vec![0.0; model.condensed_dofs()], vec![0.0; model.condensed_dofs()]);
+    for n in [3, 1, 6, 2, 5] {
+        let imposed: Vec<_> = top[..n]
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (t, [1e-4 * i as f64, -0.002, -5e-5 * i as f64]))
+            .collect();
+        let got = model.impose_with(&imposed, &mut u, &mut work).expect("impose").to_vec();
+        let fresh = model.impose(&imposed, &mut fresh_u).expect("impose");
+        assert_eq!(got, fresh);
+        assert_eq!(u, fresh_u);
+        // The reference: the imposed block of the condensed inverse, solved densely.
+        // Column j of the inverse's block at (a, b): a's displacement under a unit force on b's axis j.
+        let s_inv = |a: NodeId, b: NodeId| -> [[f64; 3]; 3] {
+            let cols: [[f64; 3]; 3] = std::array::from_fn(|j| {
+                let mut unit = [(b, [0.0; 3])];
+                unit[0].1[j] = 1.0;
+                let mut col = vec![0.0; model.condensed_dofs()];
+                model.apply_forces(&unit, &mut col).expect("forces");
+                model.displacement(&col, a).expect("surface")
+            });
+            std::array::from_fn(|i| std::array::from_fn(|j| cols[j][i]))
+        };
+        let k = 3 * n;
+        let a =
+            nalgebra::DMatrix::from_fn(k, k, |r, c| s_inv(imposed[r / 3].0, imposed[c / 3].0)[r % 3][c % 3]);
+        let b = nalgebra::DVector::from_fn(k, |r, _| imposed[r / 3].1[r % 3]);
+        let f = nalgebra::linalg::Cholesky::new(a).expect("positive definite").solve(&b);
+        let scale = f.amax();
+        for (r, x) in f.iter().enumerate() {
+            assert!(
+                (got[r / 3][r % 3] - x).abs() <= 1e-9 * scale,
+                "set of {n}, dof {r}: {} against {x}",
+                got[r / 3][r % 3]
+            );
+        }
+        for (t, d) in &imposed {
+            let at = model.displacement(&u, *t).expect("surface");
+            for c in 0..3 {
+                assert!((at[c] - d[c]).abs() < 1e-12);
+            }
         }
     }
 }

@@ -7,7 +7,8 @@
 //! the explicit inverse computed once at load time ([`FemModel`]), the static mode by selective
 //! matrix-vector multiplication, imposed displacements for grasping, the dynamic mode ([`DynamicModel`])
 //! and the comparison with ChainMail ([`compare()`]). Factorisations come from `faer` (sparse and
-//! dense Cholesky) and `nalgebra` (small blocks); no solver is written here.
+//! dense Cholesky, in place over a kept scratch for imposed sets) and `nalgebra` (element blocks); no solver
+//! is written here.
 //!
 //! Must not import wgpu, winit or egui. Depends on [`chainmail`](crate::chainmail) only for the
 //! comparison. Computes in `f64`; units are metres, newtons, pascals, kilograms and seconds, Y up.
@@ -29,4 +30,4 @@ pub use dynamic::{DynamicModel, DynamicParams};
 pub use error::FemError;
 pub use material::ElasticMaterial;
 pub use mesh::{Face, MAX_NODES, NodeId, Split, TetId, TetMesh};
-pub use model::{Base, DEFAULT_MEMORY_LIMIT, FemModel, LoadOptions, Supports, pressure_loads};
+pub use model::{Base, DEFAULT_MEMORY_LIMIT, FemModel, ImposeWork, LoadOptions, Supports, pressure_loads};

@@ -20,6 +20,18 @@ const FIXED: u32 = u32::MAX;
 /// Columns of the Schur complement computed per sparse solve.
 const SCHUR_CHUNK: usize = 64;
 
+/// Scratch of [`FemModel::impose_with`]: the imposed dofs, the block of the condensed inverse over
+/// them and its Cholesky factor's workspace, the right-hand side (then the forces at those dofs) and
+/// the forces per node. Kept between calls, it grows to the most dofs imposed and no further.
+#[derive(Clone, Debug, Default)]
+pub struct ImposeWork {
+    dofs: Vec<usize>,
+    rhs: Vec<f64>,
+    block: Vec<f64>,
+    stack: Vec<std::mem::MaybeUninit<u8>>,
+    forces: Vec<[f64; 3]>,
+}
+
 /// Options of [`FemModel::load`].
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -468,12 +480,25 @@ impl FemModel {
     /// other surface nodes. Solves the small `k × k` system `(S⁻¹)_kk f_k = d_k` for the forces at the
     /// imposed dofs, then the surface displacement `u` by selective multiplication. Returns the force
     /// (newtons) the instrument applies at each imposed node, in the order given. Components on fixed
-    /// axes are ignored (they stay at zero). Allocates only the small `k × k` system and the returned
-    /// forces.
+    /// axes are ignored (they stay at zero). Allocates its scratch and the returned forces: a caller
+    /// that imposes every step keeps an [`ImposeWork`] and calls [`impose_with`](Self::impose_with).
     pub fn impose(&self, imposed: &[(NodeId, [f64; 3])], u: &mut [f64]) -> Result<Vec<[f64; 3]>, FemError> {
+        let mut work = ImposeWork::default();
+        self.impose_with(imposed, u, &mut work).map(<[[f64; 3]]>::to_vec)
+    }
+
+    /// [`impose`](Self::impose) with its scratch in `work`: allocates only when more dofs are imposed
+    /// than in any earlier call with the same `work`. Returns the forces, in the order given.
+    pub fn impose_with<'w>(
+        &self,
+        imposed: &[(NodeId, [f64; 3])],
+        u: &mut [f64],
+        work: &'w mut ImposeWork,
+    ) -> Result<&'w [[f64; 3]], FemError> {
         self.check_len("displacement vector", u.len())?;
-        let mut dofs = Vec::with_capacity(3 * imposed.len());
-        let mut targets = Vec::with_capacity(3 * imposed.len());
+        let ImposeWork { dofs, rhs, block, stack, forces } = work;
+        dofs.clear();
+        rhs.clear();
         for (i, (node, disp)) in imposed.iter().enumerate() {
             let d = self.surface_dofs(*node)?;
             if imposed[..i].iter().any(|(m, _)| m == node) {
@@ -483,27 +508,54 @@ impl FemModel {
                 finite("imposed displacement", disp[a])?;
                 if d[a] != FIXED {
                     dofs.push(d[a] as usize);
-                    targets.push(disp[a]);
+                    rhs.push(disp[a]);
                 }
             }
         }
         let k = dofs.len();
-        let a = nalgebra::DMatrix::from_fn(k, k, |r, c| self.inverse.col_as_slice(dofs[c])[dofs[r]]);
-        let b = nalgebra::DVector::from_column_slice(&targets);
-        let f = nalgebra::linalg::Cholesky::new(a)
-            .ok_or(FemError::Singular {
-                which: "imposed-node block of the condensed inverse",
-                detail: "Cholesky failed".into(),
-            })?
-            .solve(&b);
+        block.clear();
+        for &c in dofs.iter() {
+            let col = self.inverse.col_as_slice(c);
+            block.extend(dofs.iter().map(|&r| col[r]));
+        }
+        let bytes = faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
+            k,
+            faer::Par::Seq,
+            Default::default(),
+        )
+        .or(faer::linalg::cholesky::llt::solve::solve_in_place_scratch::<f64>(k, 1, faer::Par::Seq))
+        .unaligned_bytes_required();
+        if stack.len() < bytes {
+            stack.resize(bytes, std::mem::MaybeUninit::uninit());
+        }
+        let mem = faer::dyn_stack::MemStack::new(stack);
+        let mut a = faer::MatMut::from_column_major_slice_mut(block, k, k);
+        faer::linalg::cholesky::llt::factor::cholesky_in_place(
+            a.as_mut(),
+            Default::default(),
+            faer::Par::Seq,
+            mem,
+            Default::default(),
+        )
+        .map_err(|_| FemError::Singular {
+            which: "imposed-node block of the condensed inverse",
+            detail: "Cholesky failed".into(),
+        })?;
+        faer::linalg::cholesky::llt::solve::solve_in_place_with_conj(
+            a.as_ref(),
+            Conj::No,
+            faer::MatMut::from_column_major_slice_mut(rhs, k, 1),
+            faer::Par::Seq,
+            mem,
+        );
         u.fill(0.0);
-        for (&j, &fj) in dofs.iter().zip(f.iter()) {
+        for (&j, &fj) in dofs.iter().zip(rhs.iter()) {
             for (ui, &c) in u.iter_mut().zip(self.inverse.col_as_slice(j)) {
                 *ui += c * fj;
             }
         }
-        let mut out = Vec::with_capacity(imposed.len());
-        let mut it = f.iter();
+        forces.clear();
+        let mut it = rhs.iter();
         for (node, _) in imposed {
             let d = self.dof[node.index()];
             let mut force = [0.0; 3];
@@ -512,9 +564,9 @@ impl FemModel {
                     force[a] = it.next().copied().unwrap_or(0.0);
                 }
             }
-            out.push(force);
+            forces.push(force);
         }
-        Ok(out)
+        Ok(forces)
     }
 
     /// The displacement of a node from a condensed displacement vector: `Some` for surface nodes

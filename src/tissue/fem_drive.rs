@@ -5,8 +5,8 @@
 
 use crate::chainmail::{Body, ElementId};
 use crate::fem::{
-    Base, DynamicModel, DynamicParams, ElasticMaterial, FemError, FemModel, LoadOptions, NodeId, Split,
-    Supports, TetMesh,
+    Base, DynamicModel, DynamicParams, ElasticMaterial, FemError, FemModel, ImposeWork, LoadOptions, NodeId,
+    Split, Supports, TetMesh,
 };
 
 /// Why a cut on a finite-element volume is refused.
@@ -35,6 +35,11 @@ pub struct FemDrive {
     dynamic: Option<DynamicModel>,
     /// Condensed displacement (static mode).
     u: Vec<f64>,
+    /// Scratch of an imposed set: the nodes and displacements, the solve's workspace, and the
+    /// loads of a dynamic step (kept so that a press allocates nothing step after step).
+    nodes: Vec<(NodeId, [f64; 3])>,
+    work: ImposeWork,
+    loads: Vec<(NodeId, [f64; 3])>,
     /// The force the block exerts on whatever drives its node (minus the force imposing the
     /// displacement), newtons.
     reaction: [f32; 3],
@@ -69,24 +74,34 @@ impl FemDrive {
             None
         };
         let u = vec![0.0; model.condensed_dofs()];
-        Ok(Self { model, dynamic, u, reaction: [0.0; 3] })
+        Ok(Self {
+            model,
+            dynamic,
+            u,
+            nodes: Vec::new(),
+            work: ImposeWork::default(),
+            loads: Vec::new(),
+            reaction: [0.0; 3],
+        })
     }
 
     /// Imposes `displacement` (metres) on the surface node of element `e` and writes every surface
     /// node's position into `body`; returns how many it wrote.
     pub fn impose(&mut self, e: ElementId, displacement: [f32; 3], body: &mut Body) -> Result<u32, FemError> {
-        let d = displacement.map(f64::from);
-        let forces = self.model.impose(&[(NodeId(e.0), d)], &mut self.u)?;
-        self.reaction = forces.first().map_or([0.0; 3], |f| f.map(|x| -x as f32));
+        let node = [(NodeId(e.0), displacement.map(f64::from))];
+        let forces = self.model.impose_with(&node, &mut self.u, &mut self.work)?;
+        let force = forces.first().copied().unwrap_or([0.0; 3]);
+        self.reaction = force.map(|x| -x as f32);
         if let Some(dynamic) = &mut self.dynamic {
-            let u = dynamic.step(&[(NodeId(e.0), forces[0])])?;
+            let u = dynamic.step(&[(node[0].0, force)])?;
             self.u.copy_from_slice(u);
         }
         Ok(self.write_into(body))
     }
 
     /// Imposes a displacement (metres) on each of several surface nodes at once, as a ball does on
-    /// the top face it presses, and returns the force that imposes each (newtons, on the node). The
+    /// the top face it presses, and returns the force that imposes each (newtons, on the node; kept in
+    /// the drive's scratch, which grows to the largest set and allocates no further). The
     /// reaction is their sum. Surface displacements are read with [`FemDrive::displacement`] and
     /// written by [`FemDrive::write_into`]. A dynamic block takes its time step only with `step`
     /// (a press tries several sets of nodes in a step and keeps the last).
@@ -94,18 +109,19 @@ impl FemDrive {
         &mut self,
         imposed: &[(ElementId, [f32; 3])],
         step: bool,
-    ) -> Result<Vec<[f32; 3]>, FemError> {
-        let nodes: Vec<(NodeId, [f64; 3])> =
-            imposed.iter().map(|&(e, d)| (NodeId(e.0), d.map(f64::from))).collect();
-        let forces = self.model.impose(&nodes, &mut self.u)?;
+    ) -> Result<&[[f64; 3]], FemError> {
+        let Self { model, dynamic, u, nodes, work, loads, reaction } = self;
+        nodes.clear();
+        nodes.extend(imposed.iter().map(|&(e, d)| (NodeId(e.0), d.map(f64::from))));
+        let forces = model.impose_with(nodes, u, work)?;
         let total = forces.iter().fold([0.0f64; 3], |t, f| [t[0] + f[0], t[1] + f[1], t[2] + f[2]]);
-        self.reaction = total.map(|x| -x as f32);
-        if step && let Some(dynamic) = &mut self.dynamic {
-            let loads: Vec<(NodeId, [f64; 3])> = nodes.iter().zip(&forces).map(|(n, f)| (n.0, *f)).collect();
-            let u = dynamic.step(&loads)?;
-            self.u.copy_from_slice(u);
+        *reaction = total.map(|x| -x as f32);
+        if step && let Some(dynamic) = dynamic {
+            loads.clear();
+            loads.extend(nodes.iter().zip(forces).map(|(n, f)| (n.0, *f)));
+            u.copy_from_slice(dynamic.step(loads)?);
         }
-        Ok(forces.iter().map(|f| f.map(|x| x as f32)).collect())
+        Ok(forces)
     }
 
     /// Whether the block integrates in time (its dynamic mode).

@@ -214,7 +214,7 @@ impl Tissue {
                     .any(|&e| self.violates(e as usize, tol, pair));
             // The plain path beside the scan: every suspect's links, one by one (in debug builds, so
             // that every test's steps compare the two).
-            #[cfg(debug_assertions)]
+            #[cfg(all(debug_assertions, not(feature = "count-allocations")))]
             {
                 let plain = r.suspects.iter().any(|&e| self.violates(e as usize, tol, pair));
                 debug_assert!(!plain || any, "the tear scan missed a link out of its box");

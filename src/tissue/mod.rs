@@ -857,7 +857,7 @@ impl Tissue {
         let geometry = self.geometry;
         // A flat surface's world is its lattice with the axes permuted: the same lengths, without the
         // surface's general map per link end.
-        #[cfg(debug_assertions)]
+        #[cfg(all(debug_assertions, not(feature = "count-allocations")))]
         let flat = |p| Vec3::from(Surface::flat_to_world(p));
         let general = |p| Vec3::from(geometry.to_world(p));
         if matches!(geometry, Geometry::Surface(s) if s.is_flat()) {
@@ -870,13 +870,13 @@ impl Tissue {
             (Geometry::Surface(s), None) if s.is_flat() => {
                 let m =
                     self.scan_flat_split::<false>(&mut hits, &NO_BOXES, &wide, &mut out, &mut spare, SPLIT);
-                #[cfg(debug_assertions)]
+                #[cfg(all(debug_assertions, not(feature = "count-allocations")))]
                 self.check_scan::<false>(&tear2, &hits, flat, &NO_BOXES, &wide, &out, m);
                 m
             }
             (Geometry::Surface(s), Some(b)) if s.is_flat() => {
                 let m = self.scan_flat_split::<true>(&mut hits, &b, &wide, &mut out, &mut spare, SPLIT);
-                #[cfg(debug_assertions)]
+                #[cfg(all(debug_assertions, not(feature = "count-allocations")))]
                 self.check_scan::<true>(&tear2, &hits, flat, &b, &wide, &out, m);
                 m
             }
@@ -993,7 +993,7 @@ impl Tissue {
 
     /// The plain scan beside the table's (debug builds): the same largest stretch, tears, box
     /// finding, drift and kept elements, to the bit.
-    #[cfg(debug_assertions)]
+    #[cfg(all(debug_assertions, not(feature = "count-allocations")))]
     #[allow(clippy::too_many_arguments)]
     fn check_scan<const BOXES: bool>(
         &self,

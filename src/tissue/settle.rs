@@ -5,7 +5,7 @@
 //! the tissue settles, and relaxation, contact and the tear check cost what is still moving.
 
 use super::{RegionScan, Tissue, scan};
-#[cfg(debug_assertions)]
+#[cfg(all(debug_assertions, not(feature = "count-allocations")))]
 use crate::chainmail::LinkId;
 use crate::chainmail::{ElementId, RelaxBudget, RelaxReport};
 
@@ -483,7 +483,7 @@ impl Tissue {
             hits.dedup();
             let key = (self.body.motion(), self.body.revision());
             let max_stretch2 = max2.max(self.max_stretch * self.max_stretch);
-            #[cfg(debug_assertions)]
+            #[cfg(all(debug_assertions, not(feature = "count-allocations")))]
             self.check_sweep_window(&tear2, &hits, max_stretch2);
             self.region_scan = Some(RegionScan { key, max_stretch2, drift });
             self.swept_checks += 1;
@@ -495,7 +495,7 @@ impl Tissue {
 
     /// The region's own scan beside the swept elements' (debug builds): every tear it finds is among
     /// theirs, and its largest stretch is no more than the figure they give.
-    #[cfg(debug_assertions)]
+    #[cfg(all(debug_assertions, not(feature = "count-allocations")))]
     fn check_sweep_window(&self, tear2: &[f32], hits: &[LinkId], max_stretch2: f32) {
         let geometry = self.geometry;
         let world = |p| glam::Vec3::from(geometry.to_world(p));

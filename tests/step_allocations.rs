@@ -1,0 +1,85 @@
+//! A step allocates nothing once the session's scratch has grown to what it needs: every bundled scene
+//! played with every script written for it (`scripts/<scene>.ron`, `scripts/<scene>_*.ron`), each step
+//! counted by a counting allocator. The first step builds what the session keeps; after it, scratch
+//! lists grow by doubling the first few times they are used (a grasp's held set, a cone's growth, a
+//! cut's strokes), so a step allocates now and then and never every step. The bound below fails on
+//! anything that allocates every step or every few steps (a per-step `Vec`, a solve that builds its
+//! matrix each call), which is what the rule "no allocation per step" forbids.
+//!
+//! Runs only with the `count-allocations` feature, which replaces the library's mimalloc with the
+//! counting allocator (and leaves out the debug builds' reference checks beside the fast paths, which
+//! allocate): `cargo test --features count-allocations --test step_allocations` (CI runs it). What is
+//! counted is the stepping thread's allocations.
+#![cfg(feature = "count-allocations")]
+
+use std::path::{Path, PathBuf};
+
+use dissect::runner::Player;
+use dissect::scene::{Scene, Script};
+
+/// Every bundled scene and the scripts written for it.
+fn sessions() -> Vec<(PathBuf, PathBuf)> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let ron = |d: &Path| -> Vec<PathBuf> {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(d)
+            .expect("scenes")
+            .filter_map(|e| Some(e.ok()?.path()).filter(|p| p.extension().is_some_and(|x| x == "ron")))
+            .collect();
+        v.sort();
+        v
+    };
+    let scripts = ron(&dir.join("scripts"));
+    let stem = |p: &Path| p.file_stem().and_then(|s| s.to_str()).unwrap_or("").to_string();
+    let mut out = Vec::new();
+    for scene in ron(&dir) {
+        let name = stem(&scene);
+        for script in &scripts {
+            let s = stem(script);
+            if s == name || s.strip_prefix(&name).is_some_and(|rest| rest.starts_with('_')) {
+                out.push((scene.clone(), script.clone()));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn steps_allocate_only_while_their_scratch_grows() {
+    let sessions = sessions();
+    assert!(sessions.len() >= 10, "{sessions:?}");
+    let mut report = Vec::new();
+    for (scene_path, script_path) in &sessions {
+        let scene = Scene::load(scene_path).unwrap_or_else(|e| panic!("{e}"));
+        let script = Script::load(script_path).unwrap_or_else(|e| panic!("{e}"));
+        let mut world = scene.build_world(false).unwrap_or_else(|e| panic!("{e}"));
+        let mut player = Player::new(script.0.clone());
+        let (mut steps, mut allocating, mut allocations, mut most) = (0u64, 0u64, 0u64, 0u64);
+        loop {
+            player.feed(&mut world);
+            if player.finished() && world.pending().is_empty() {
+                break;
+            }
+            let info = allocation_counter::measure(|| {
+                world.step();
+            });
+            steps += 1;
+            if steps > 1 && info.count_total > 0 {
+                allocating += 1;
+                allocations += info.count_total;
+                most = most.max(info.count_total);
+            }
+        }
+        let label = format!(
+            "{} with {}: {steps} steps, {allocating} of them allocate after the first ({allocations} allocations, at most {most} in a step)",
+            scene_path.file_name().and_then(|s| s.to_str()).unwrap_or(""),
+            script_path.file_name().and_then(|s| s.to_str()).unwrap_or("")
+        );
+        println!("{label}");
+        // Growth by doubling: a few dozen steps over a session of thousands, a few dozen allocations
+        // in the step that first grasps or cuts.
+        let grows = steps >= 100 && allocating <= 64 && allocating * 20 <= steps && most <= 64;
+        report.push((grows, label));
+    }
+    let failed: Vec<&str> = report.iter().filter(|r| !r.0).map(|r| r.1.as_str()).collect();
+    assert!(failed.is_empty(), "steps that allocate more than growth does:\n{}", failed.join("\n"));
+}
