@@ -39,6 +39,9 @@ pub struct Body {
     pub(crate) lattice: Lattice,
     pub(crate) pos: Vec<[f32; 3]>,
     pub(crate) flags: Vec<u8>,
+    /// The pinned elements, in the order they were pinned (kept with the flags by
+    /// [`Body::set_pinned`], so that what asks about the pins reads them, not every element).
+    pinned: Vec<ElementId>,
     pub(crate) materials: Vec<Material>,
     pub(crate) link_material: Vec<MaterialId>,
     /// Constraint box `[lo, hi]` on `p[b] - p[a]`, with the wrap jump folded in.
@@ -154,6 +157,7 @@ impl Body {
             slot_nbr,
             pos: lattice.rest.clone(),
             flags: vec![0; n],
+            pinned: Vec::new(),
             materials: vec![material],
             link_material: vec![MaterialId(0); m],
             link_box: vec![[[0.0; 3]; 2]; m],
@@ -387,7 +391,19 @@ impl Body {
     /// Pins or unpins an element: a pinned element never moves, and a deformation that would have to
     /// move it is cut back to what it allows.
     pub fn set_pinned(&mut self, e: ElementId, pinned: bool) -> Result<(), ChainMailError> {
-        self.set_flag(e, PINNED, pinned)
+        let was = self.is_pinned(e);
+        self.set_flag(e, PINNED, pinned)?;
+        if pinned && !was {
+            self.pinned.push(e);
+        } else if !pinned && was {
+            self.pinned.retain(|&p| p != e);
+        }
+        Ok(())
+    }
+
+    /// The pinned elements, in the order they were pinned.
+    pub fn pinned_elements(&self) -> &[ElementId] {
+        &self.pinned
     }
 
     /// Marks an element as held by an instrument: it moves only as the source of a deformation.
@@ -600,6 +616,27 @@ impl Body {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The list of pinned elements follows the flags: pinned twice counts once, unpinned leaves it,
+    /// and it holds exactly the elements `is_pinned` names.
+    #[test]
+    fn the_pinned_list_follows_the_flags() {
+        let mut body =
+            Body::new(Lattice::sheet(5, 4, 0.01).expect("sheet"), Material::default()).expect("body");
+        for (e, on) in
+            [(3, true), (7, true), (3, true), (11, true), (7, false), (19, true), (0, false), (11, false)]
+        {
+            body.set_pinned(ElementId(e), on).expect("pin");
+            let flagged: Vec<ElementId> =
+                (0..body.positions().len() as u32).map(ElementId).filter(|&x| body.is_pinned(x)).collect();
+            let mut listed = body.pinned_elements().to_vec();
+            listed.sort();
+            assert_eq!(listed, flagged);
+        }
+        assert_eq!(body.pinned_elements(), &[ElementId(3), ElementId(19)]);
+        assert!(body.set_pinned(ElementId(20), true).is_err());
+        assert_eq!(body.pinned_elements().len(), 2);
+    }
 
     #[test]
     fn class_table_stays_small_under_live_tuning() {

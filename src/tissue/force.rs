@@ -277,7 +277,7 @@ impl Tissue {
     /// its elements (so the same at every spacing): for a layer, the annulus of membrane between the
     /// patch and the nearest pinned element at `R_out`, `2π·E·t / ln(R_out / radius)` (plane stress,
     /// ν = 0, `R_out` at least twice the radius); for a volume, a rigid punch on the lattice,
-    /// `4·c·radius`. Walks every element once (pins): call it once per grasp, not every step.
+    /// `4·c·radius`. Walks the pinned elements once: call it once per grasp, not every step.
     pub fn patch_stiffness(&self, centre: ElementId, radius: f32) -> f32 {
         let radius = radius.max(f32::MIN_POSITIVE);
         // The stiffest material among the centre's own (not connective) links.
@@ -297,8 +297,8 @@ impl Tissue {
                 let Some(&c) = rest.get(centre.index()) else { return 0.0 };
                 let c = self.geometry.to_world(c);
                 let mut nearest = f32::INFINITY;
-                for (i, &r) in rest.iter().enumerate() {
-                    if self.body.is_pinned(ElementId(i as u32)) {
+                for p in self.body.pinned_elements() {
+                    if let Some(&r) = rest.get(p.index()) {
                         nearest = nearest.min(norm(sub(self.geometry.to_world(r), c)));
                     }
                 }
