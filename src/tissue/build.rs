@@ -548,6 +548,19 @@ impl Tissue {
             .into_iter()
             .map(|(kind, ids)| (kind, super::link_grid::LinkGrid::new(&body, &ids, wrapped)))
             .collect();
+        // Each layer's surface elements where they rest, on a flat surface (the nearest element's search).
+        let layer_elements = match geometry {
+            Geometry::Surface(s) if s.is_flat() => layers
+                .iter()
+                .map(|l| {
+                    let ids: Vec<u32> = (l.first..l.first + l.count)
+                        .filter(|&e| on_surface.get(e as usize) == Some(&true))
+                        .collect();
+                    super::link_grid::LinkGrid::of_elements(&body, &ids, false)
+                })
+                .collect(),
+            _ => Vec::new(),
+        };
         // Only a flat surface's tear scan reads the table (see `scan.rs`).
         let scan_table = match geometry {
             Geometry::Surface(s) if s.is_flat() => super::scan::ScanTable::new(&body, &link_kind, &rest_len),
@@ -566,6 +579,7 @@ impl Tissue {
             fill_found: touched_empty(n),
             kind_links,
             cut_candidates: Vec::new(),
+            layer_elements,
             drift_max: 0.0,
             drift_at: None,
             tear_scratch: Vec::new(),

@@ -91,22 +91,37 @@ impl Tissue {
         if self.drift_at == Some(motion) {
             return self.drift_max;
         }
+        self.drift_max = match self.drift_bound() {
+            Some(d) => d,
+            None => {
+                let (pos, rest) = (self.body.positions(), self.body.lattice().rest_positions());
+                (0..pos.len()).fold(0.0f32, |m, i| m.max(drift_of(pos, rest, i)))
+            }
+        };
+        self.drift_at = Some(motion);
+        self.drift_max
+    }
+
+    /// [`Tissue::drift`] where it costs no more than the region: kept, or followed from the region
+    /// since it was kept; `None` after moves made outside the steps (the whole body must be measured).
+    pub(crate) fn drift_bound(&self) -> Option<f32> {
+        if self.drift_at == Some(self.body.motion()) {
+            return Some(self.drift_max);
+        }
         let (pos, rest) = (self.body.positions(), self.body.lattice().rest_positions());
-        let off = |i: usize| (pos[i][0] - rest[i][0]).abs().max((pos[i][1] - rest[i][1]).abs());
-        let region = |m: f32| self.active.iter().fold(m, |m, e| m.max(off(e.index())));
-        self.drift_max = match (self.drift_at, self.scan()) {
+        let region = |m: f32| self.active.iter().fold(m, |m, e| m.max(drift_of(pos, rest, e.index())));
+        match (self.drift_at, self.scan()) {
             // The limits' repair's scan of the region measured it (the plain loop beside it in debug
             // builds, so that every test's steps compare them).
             (Some(_), Some(s)) => {
                 let d = self.drift_max.max(s.drift);
+                #[cfg(all(debug_assertions, not(feature = "count-allocations")))]
                 debug_assert_eq!(d.to_bits(), region(self.drift_max).to_bits(), "the scan's drift differs");
-                d
+                Some(d)
             }
-            (Some(_), None) => region(self.drift_max),
-            (None, _) => (0..pos.len()).fold(0.0f32, |m, i| m.max(off(i))),
-        };
-        self.drift_at = Some(motion);
-        self.drift_max
+            (Some(_), None) => Some(region(self.drift_max)),
+            (None, _) => None,
+        }
     }
 
     /// Applies every queued cut; returns how many links it severed.
@@ -225,6 +240,11 @@ impl Tissue {
     }
 }
 
+/// How far element `i` lies from where it rests across the surface (largest of `|du|`, `|dv|`).
+fn drift_of(pos: &[[f32; 3]], rest: &[[f32; 3]], i: usize) -> f32 {
+    (pos[i][0] - rest[i][0]).abs().max((pos[i][1] - rest[i][1]).abs())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -246,7 +266,8 @@ mod tests {
 
     /// The link grid visits every link a stroke can reach: after random pulls (which move elements
     /// far from rest across the plane), random strokes of every depth cut exactly the links a scan
-    /// of every link cuts (the plain path: one cell holding them all).
+    /// of every link cuts (the plain path: one cell holding them all). The element grids find the
+    /// element nearest a point exactly as a scan of every element does.
     #[test]
     fn strokes_cut_what_a_scan_of_every_link_cuts() {
         use crate::chainmail::{ElementId, Material, Pass, RelaxBudget};
@@ -287,6 +308,14 @@ mod tests {
                     *grid =
                         super::super::link_grid::LinkGrid::with_cells_of(&t.body, &all, wrapped, per_cell);
                 }
+                // Cells of two elements: the nearest element's search must widen past the drift.
+                for grid in &mut t.layer_elements {
+                    let mut all = Vec::new();
+                    grid.near([0.0; 2], [0.0; 2], f32::INFINITY, &mut all);
+                    *grid = super::super::link_grid::LinkGrid::of_elements_in_cells_of(
+                        &t.body, &all, wrapped, per_cell,
+                    );
+                }
             }
             let n = fast.body.element_count();
             let mut pulled = Vec::new();
@@ -309,6 +338,38 @@ mod tests {
                         t.relax(RelaxBudget::sweeps(3));
                         t.end_step();
                     }
+                }
+            }
+            // The nearest element's search by cells answers as a scan of every element does, near
+            // what was pulled (elements far from rest) and anywhere over the sheet.
+            assert_eq!(fast.layer_elements.len(), 2);
+            assert!(fast.layer_elements.iter().all(|g| !g.is_whole()));
+            for k in 0..60 {
+                let p = if k % 2 == 0 {
+                    let e = pulled[(rng() * pulled.len() as f32) as usize % pulled.len()];
+                    let at = fast.world_position(e).unwrap_or_else(|| panic!("element {e:?}"));
+                    [at[0] + 0.004 * (rng() - 0.5), 0.006 * rng() - 0.001, at[2] + 0.004 * (rng() - 0.5)]
+                } else {
+                    [0.05 * rng() - 0.025, 0.01 * rng() - 0.002, 0.04 * rng() - 0.02]
+                };
+                for layer in [None, Some(0), Some(1)] {
+                    let mut want: Option<(f32, u32)> = None;
+                    for (li, l) in fast.layers.iter().enumerate().rev() {
+                        if layer.is_some_and(|x| x != li) {
+                            continue;
+                        }
+                        if let Some((d, i)) = fast.nearest_of(l.first..l.first + l.count, p)
+                            && want.is_none_or(|(bd, _)| d < bd)
+                        {
+                            want = Some((d, i));
+                        }
+                    }
+                    let want = want.map(|(_, i)| ElementId(i));
+                    assert_eq!(
+                        fast.nearest_element(p, layer),
+                        want,
+                        "round {round}, point {k} {p:?}, layer {layer:?}"
+                    );
                 }
             }
             for k in 0..30 {

@@ -34,18 +34,47 @@ impl LinkGrid {
     pub(crate) fn with_cells_of(body: &Body, ids: &[u32], wrapped: bool, per_cell: f32) -> Self {
         let lat = body.lattice();
         let rest = lat.rest_positions();
-        let mut lo = [f32::INFINITY; 2];
-        let mut hi = [f32::NEG_INFINITY; 2];
         let mut span = 0.0f32;
         for &l in ids {
-            let id = crate::chainmail::LinkId(l);
-            let (Some([a, _]), Some(off)) = (lat.link_ends(id), lat.link_rest(id)) else { continue };
-            let p = rest[a.index()];
+            if let Some(off) = lat.link_rest(crate::chainmail::LinkId(l)) {
+                span = span.max(off[0].abs()).max(off[1].abs());
+            }
+        }
+        let at = |l: u32| {
+            lat.link_ends(crate::chainmail::LinkId(l)).and_then(|[a, _]| rest.get(a.index()).copied())
+        };
+        Self::bucket(ids, at, span, wrapped, per_cell)
+    }
+
+    /// Elements (`ids`, of `body`) bucketed by where they rest, as links are by their first end: what
+    /// a search for the element nearest a point reads (see `Tissue::nearest_element`).
+    pub(crate) fn of_elements(body: &Body, ids: &[u32], wrapped: bool) -> Self {
+        Self::of_elements_in_cells_of(body, ids, wrapped, PER_CELL)
+    }
+
+    /// [`LinkGrid::of_elements`] with about `per_cell` elements a cell.
+    pub(crate) fn of_elements_in_cells_of(body: &Body, ids: &[u32], wrapped: bool, per_cell: f32) -> Self {
+        let rest = body.lattice().rest_positions();
+        Self::bucket(ids, |e| rest.get(e as usize).copied(), 0.0, wrapped, per_cell)
+    }
+
+    /// `ids` in cells of about `per_cell` by the rest position `at` gives each (lattice coordinates;
+    /// `(u, v)` are the first two); `span`: how far from that point what an id stands for reaches.
+    fn bucket(
+        ids: &[u32],
+        at: impl Fn(u32) -> Option<[f32; 3]>,
+        span: f32,
+        wrapped: bool,
+        per_cell: f32,
+    ) -> Self {
+        let mut lo = [f32::INFINITY; 2];
+        let mut hi = [f32::NEG_INFINITY; 2];
+        for &l in ids {
+            let Some(p) = at(l) else { continue };
             for k in 0..2 {
                 lo[k] = lo[k].min(p[k]);
                 hi[k] = hi[k].max(p[k]);
             }
-            span = span.max(off[0].abs()).max(off[1].abs());
         }
         let extent = [(hi[0] - lo[0]).max(0.0), (hi[1] - lo[1]).max(0.0)];
         let area = (extent[0] * extent[1]).max(f32::MIN_POSITIVE);
@@ -71,10 +100,7 @@ impl LinkGrid {
         };
         // Counting sort by cell: ids stay in id order within a cell.
         let mut start = vec![0u32; dims[0] * dims[1] + 1];
-        let cells: Vec<usize> = ids
-            .iter()
-            .map(|&l| lat.link_ends(crate::chainmail::LinkId(l)).map_or(0, |[a, _]| cell_of(rest[a.index()])))
-            .collect();
+        let cells: Vec<usize> = ids.iter().map(|&l| at(l).map_or(0, cell_of)).collect();
         for &c in &cells {
             start[c + 1] += 1;
         }
@@ -94,17 +120,21 @@ impl LinkGrid {
     /// element may have moved from rest across the plane) and by what a link can reach from its first
     /// end, appended to `out` in no particular order.
     pub(crate) fn near(&self, lo: [f32; 2], hi: [f32; 2], drift: f32, out: &mut Vec<u32>) {
-        if self.dims == [1, 1] {
-            out.extend_from_slice(&self.ids);
-            return;
+        for ids in self.cells_near(lo, hi, drift) {
+            out.extend_from_slice(ids);
         }
+    }
+
+    /// [`LinkGrid::near`]'s ids a run of cells at a time (each run in id order within a cell).
+    pub(crate) fn cells_near(&self, lo: [f32; 2], hi: [f32; 2], drift: f32) -> impl Iterator<Item = &[u32]> {
         // Both ends lie within `drift` of where they rest, and the second end rests within `span` of
         // the first: the whole link lies within `span + drift` of its first end's rest position.
         let widen = drift + self.span;
+        let whole = self.dims == [1, 1];
         let range = |k: usize| -> Option<(usize, usize)> {
             let a = (lo[k] - widen - self.lo[k]) / self.cell;
             let b = (hi[k] + widen - self.lo[k]) / self.cell;
-            if !(a.is_finite() && b.is_finite()) {
+            if whole || !(a.is_finite() && b.is_finite()) {
                 return Some((0, self.dims[k] - 1));
             }
             if b < 0.0 || a >= self.dims[k] as f32 {
@@ -112,11 +142,37 @@ impl LinkGrid {
             }
             Some(((a.max(0.0)) as usize, (b as usize).min(self.dims[k] - 1)))
         };
-        let (Some((i0, i1)), Some((j0, j1))) = (range(0), range(1)) else { return };
-        for j in j0..=j1 {
-            let (s, e) =
-                (self.start[j * self.dims[0] + i0] as usize, self.start[j * self.dims[0] + i1 + 1] as usize);
-            out.extend_from_slice(&self.ids[s..e]);
-        }
+        let rows = match (range(0), range(1)) {
+            (Some((i0, i1)), Some((j0, j1))) => Some((i0, i1, j0..=j1)),
+            _ => None,
+        };
+        rows.into_iter().flat_map(move |(i0, i1, js)| {
+            js.map(move |j| {
+                let (s, e) = (
+                    self.start[j * self.dims[0] + i0] as usize,
+                    self.start[j * self.dims[0] + i1 + 1] as usize,
+                );
+                &self.ids[s..e]
+            })
+        })
+    }
+
+    /// The width of a cell (lattice units; infinite when every id is in one cell).
+    pub(crate) fn cell_width(&self) -> f32 {
+        self.cell
+    }
+
+    /// Whether [`LinkGrid::cells_near`] of the same box reads every cell.
+    pub(crate) fn covers(&self, lo: [f32; 2], hi: [f32; 2], drift: f32) -> bool {
+        let widen = drift + self.span;
+        self.is_whole()
+            || (0..2).all(|k| {
+                lo[k] - widen <= self.lo[k] && hi[k] + widen >= self.lo[k] + self.dims[k] as f32 * self.cell
+            })
+    }
+
+    /// Whether every id is in one cell (a wrapped surface or a volume): a query reads them all.
+    pub(crate) fn is_whole(&self) -> bool {
+        self.dims == [1, 1]
     }
 }
