@@ -135,14 +135,15 @@ fn exercise(c: &mut Criterion, name: &str, scene: &str, script: &Script, sizes: 
         let s = TimeStats::of(samples);
         let c = TimeStats::of(cpu);
         println!(
-            "exercise/{name}/{nu}x{nv}: {} steps ({}), mean {:.0} µs, p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs; CPU time p99 {:.0} µs",
+            "exercise/{name}/{nu}x{nv}: {} steps ({}), mean {:.0} µs, p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs; CPU time p99 {:.0} µs, max {:.0} µs",
             samples.len(),
             if whole > 0 { "whole sessions" } else { "no session played to its end" },
             s.mean,
             s.p50,
             s.p99,
             s.max,
-            c.p99
+            c.p99,
+            c.max
         );
         means.push(((nu, nv), s.mean));
     }
