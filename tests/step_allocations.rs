@@ -92,3 +92,53 @@ fn steps_allocate_only_while_their_scratch_grows() {
     let failed: Vec<&str> = report.iter().filter(|r| !r.0).map(|r| r.1.as_str()).collect();
     assert!(failed.is_empty(), "steps that allocate more than growth does:\n{}", failed.join("\n"));
 }
+
+/// A haptic device driving the forceps through the trainer's live episode: each step reads the device,
+/// couples it to the instrument, writes its force and steps the world. Down onto the dura, close the
+/// forceps, lift 8 mm, let go: after the first step only growth allocates (the simulated device keeps
+/// every force it was sent, in a list that doubles).
+#[test]
+fn a_haptic_device_driving_the_forceps_allocates_only_while_scratch_grows() {
+    use dissect::haptics::{DeviceState, HapticLink, SimulatedDevice};
+    use dissect::simulation::{Command, InstrumentKind};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meninges.ron");
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let rate = f64::from(scene.simulation.rate_hz);
+    let mut world = scene.build_world(false).unwrap_or_else(|e| panic!("{e}"));
+    let mut start = world.tissue().surface_point(0.5, 0.5, 0.0);
+    start[1] += 0.004;
+    world.push(Command::Select(InstrumentKind::Forceps));
+    world.push(Command::MoveTo(start));
+    world.step();
+    let assessor = scene.goals.clone().map(|g| Assessor::new(g, &world));
+    let mut episode = Episode::new(world, assessor, Source::Live);
+    let device = SimulatedDevice::new(3.0, move |step| {
+        let t = step as f64 / rate;
+        let s = |a: f64, b: f64| ((t - a) / (b - a)).clamp(0.0, 1.0) as f32;
+        let y = -0.004 * s(0.0, 0.5) + 0.008 * s(0.7, 2.0);
+        Some(DeviceState { position: [0.0, y, 0.0], buttons: u32::from((0.6..2.5).contains(&t)) })
+    });
+    episode.set_haptic(HapticLink::new(Box::new(device)));
+    let steps = (3.0 * rate) as u64;
+    let (mut allocating, mut allocations, mut most) = (0u64, 0u64, 0u64);
+    let mut held_steps = 0;
+    for step in 0..steps {
+        let info = allocation_counter::measure(|| {
+            episode.step();
+        });
+        held_steps += u32::from(episode.world().instrument().grasped.is_some());
+        if step > 0 && info.count_total > 0 {
+            allocating += 1;
+            allocations += info.count_total;
+            most = most.max(info.count_total);
+        }
+    }
+    assert!(episode.take_haptic_error().is_none());
+    assert!(held_steps > 1000, "the forceps held the dura for {held_steps} steps");
+    assert!(episode.world().tissue().damage().links_torn == 0);
+    let label = format!(
+        "{steps} steps, {allocating} of them allocate after the first ({allocations} allocations, at most {most} in a step)"
+    );
+    println!("haptic forceps: {label}");
+    assert!(allocating <= 64 && allocating * 20 <= steps && most <= 64, "{label}");
+}

@@ -200,8 +200,8 @@ impl HapticLink {
     /// returns the instrument commands to give the world (and to record) for this step. A device with
     /// nothing to say gives none. A lost device or a reading that is not a pose is an error: the
     /// caller says so and goes on with the mouse.
-    pub fn exchange(&mut self, world: &crate::simulation::World) -> Result<Vec<Command>, DeviceError> {
-        let Some(state) = self.device.read()? else { return Ok(Vec::new()) };
+    pub fn exchange(&mut self, world: &crate::simulation::World) -> Result<Commands, DeviceError> {
+        let Some(state) = self.device.read()? else { return Ok(Commands::new()) };
         let max = self.device.max_force();
         let coupling = self
             .coupling
@@ -225,11 +225,15 @@ fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// A step's instrument commands from a device: a move, and a press or release of the main button. Held
+/// in place, so that a device read a thousand times a second allocates nothing.
+pub type Commands = arrayvec::ArrayVec<Command, 2>;
+
 /// What the coupling asks of the world and of the device in one step.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CouplingOutput {
     /// Instrument commands for this step (a move, and a grasp or cut on a button change).
-    pub commands: Vec<Command>,
+    pub commands: Commands,
     /// The force to send to the device, newtons.
     pub force: [f32; 3],
 }
@@ -336,7 +340,8 @@ impl Coupling {
         self.last_device = Some(x);
         self.last_force = force;
         // Commands: the move, and a press or release of the main button.
-        let mut commands = vec![Command::MoveTo(self.proxy)];
+        let mut commands = Commands::new();
+        commands.push(Command::MoveTo(self.proxy));
         let (was, now) = (self.buttons & 1 != 0, state.buttons & 1 != 0);
         if now != was {
             commands.push(match (kind, now) {
