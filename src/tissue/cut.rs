@@ -344,8 +344,12 @@ mod tests {
             // what was pulled (elements far from rest) and anywhere over the sheet.
             assert_eq!(fast.layer_elements.len(), 2);
             assert!(fast.layer_elements.iter().all(|g| !g.is_whole()));
-            for k in 0..60 {
-                let p = if k % 2 == 0 {
+            let odd =
+                [[f32::NAN, 0.0, 0.0], [f32::INFINITY, 0.0, 0.01], [1e30, 0.0, -1e30], [0.0, -1e6, 0.0]];
+            for k in 0..60 + odd.len() {
+                let p = if k >= 60 {
+                    odd[k - 60]
+                } else if k % 2 == 0 {
                     let e = pulled[(rng() * pulled.len() as f32) as usize % pulled.len()];
                     let at = fast.world_position(e).unwrap_or_else(|| panic!("element {e:?}"));
                     [at[0] + 0.004 * (rng() - 0.5), 0.006 * rng() - 0.001, at[2] + 0.004 * (rng() - 0.5)]

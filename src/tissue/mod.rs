@@ -476,8 +476,9 @@ impl Tissue {
             }
             let found = match (drift, self.layer_elements.get(li)) {
                 (Some(d), Some(grid)) if !grid.is_whole() => self.nearest_in(grid, p, d),
-                _ => self.nearest_of(l.first..l.first + l.count, p),
-            };
+                _ => None,
+            }
+            .unwrap_or_else(|| self.nearest_of(l.first..l.first + l.count, p));
             if let Some((d, i)) = found
                 && best.is_none_or(|(bd, _)| d < bd)
             {
@@ -509,12 +510,16 @@ impl Tissue {
     /// and `v`), so one whose rest lies more than `w` from `p` along `u` or `v` is more than
     /// `w − drift` away. The search reads the cells within `w` of `p` (from a cell's width, doubled
     /// until it holds an element no further than `w − drift`, or the whole layer); then no element
-    /// outside them can be nearer or as near. The same answer as the plain search, ties included.
-    fn nearest_in(&self, grid: &link_grid::LinkGrid, p: [f32; 3], drift: f32) -> Option<(f32, u32)> {
+    /// outside them can be nearer or as near. The same answer as the plain search, ties included;
+    /// `None` where it cannot bound the search (a point or drift that is not finite), for the plain one.
+    fn nearest_in(&self, grid: &link_grid::LinkGrid, p: [f32; 3], drift: f32) -> Option<Option<(f32, u32)>> {
         // A flat surface's lattice coordinates are the world's permuted (`Surface::flat_to_world`).
         let uv = [p[0], p[2]];
+        if !(p.iter().all(|x| x.is_finite()) && drift.is_finite()) {
+            return None;
+        }
         let mut w = grid.cell_width().max(self.spacing);
-        loop {
+        while w.is_finite() {
             let mut best: Option<(f32, u32)> = None;
             for ids in grid.cells_near(uv, uv, w) {
                 if let Some(b) = self.nearest_of(ids.iter().copied(), p)
@@ -525,10 +530,11 @@ impl Tissue {
             }
             let reach = w - drift;
             if grid.covers(uv, uv, w) || best.is_some_and(|(d, _)| reach > 0.0 && d <= reach * reach) {
-                return best;
+                return Some(best);
             }
             w *= 2.0;
         }
+        None
     }
 
     /// The world point at fractions `(uf, vf)` of the surface's `u` and `v` extent and `h` metres along
