@@ -2,6 +2,8 @@
 //! (the probe pushes, the forceps pull a corner, letting go returns it to rest), the probe presses it
 //! with its radius at any resolution, and cutting it is refused with a message that says why.
 
+mod common;
+
 use std::path::PathBuf;
 
 use dissect::runner;
@@ -97,16 +99,7 @@ fn the_probe_presses_a_fem_block_with_its_radius() {
         }
         let ball = [top[0], top[1] - depth, top[2]];
         let (nn, pos) = (n as usize, world.tissue().body().positions());
-        let mut inside = 0.0f32;
-        for k in 0..nn {
-            for i in 0..nn {
-                let p = pos[i + nn * ((nn - 1) + nn * k)];
-                let l2 = (p[0] - ball[0]).powi(2) + (p[2] - ball[2]).powi(2);
-                if l2 < r * r {
-                    inside = inside.max(p[1] - (ball[1] - (r * r - l2).sqrt()));
-                }
-            }
-        }
+        let inside = common::deepest_inside_ball(pos, nn, ball, r);
         let f = world.forces().probe;
         let held = world.tissue().probe_patch().len();
         println!("{n}: force {f:?} N, {held} nodes held, {} mm inside (Hertz {hertz} N)", 1e3 * inside);

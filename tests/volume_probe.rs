@@ -14,6 +14,8 @@
 //! under-resolved where an element is wider than the ball's contact radius (`√(R δ)` = 2.4 mm).
 //! Relaxation of cells converges more slowly on a finer grid: 250 steps do not settle 24³.
 
+mod common;
+
 use dissect::scene::{Scene, Tissue as SceneTissue};
 use dissect::simulation::{Command, InstrumentKind, World};
 
@@ -58,16 +60,7 @@ fn dent(n: u32, depth: f32) -> (Vec<f32>, [f32; 3], usize, f32) {
     let profile = (0..5).map(|k| height(&world, n as usize, top[0] + 0.003 * k as f32, top[2])).collect();
     let pos = world.tissue().body().positions();
     let n = n as usize;
-    let mut inside = 0.0f32;
-    for k in 0..n {
-        for i in 0..n {
-            let p = pos[i + n * ((n - 1) + n * k)];
-            let l2 = (p[0] - ball[0]).powi(2) + (p[2] - ball[2]).powi(2);
-            if l2 < r * r {
-                inside = inside.max(p[1] - (ball[1] - (r * r - l2).sqrt()));
-            }
-        }
-    }
+    let inside = common::deepest_inside_ball(pos, n, ball, r);
     (profile, world.forces().probe, world.tissue().probe_patch().len(), inside)
 }
 

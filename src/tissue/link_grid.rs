@@ -4,13 +4,17 @@
 //! drifted from rest (`Tissue::drift`: followed step by step from the disturbed region) and by the
 //! longest rest link: every link a stroke can reach is visited, and the links it hits are cut in id
 //! order, exactly as a scan of every link would cut them.
+//!
+//! The same grid buckets a layer's elements by where they rest (`LinkGrid::of_elements`, a link's
+//! reach then zero), for the search of the element nearest a point (`Tissue::nearest_element`).
 
 use crate::chainmail::Body;
 
-/// About this many links share a cell.
+/// About this many links (or elements) share a cell.
 const PER_CELL: f32 = 64.0;
 
-/// The links of one kind in cells of a uniform grid over their first ends' rest `(u, v)`.
+/// The links of one kind in cells of a uniform grid over their first ends' rest `(u, v)` (or a layer's
+/// elements over theirs).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct LinkGrid {
     lo: [f32; 2],

@@ -64,3 +64,19 @@ pub fn meninges(nu: u32, nv: u32) -> World {
 pub fn cases(default: u32) -> u32 {
     std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(default)
 }
+
+/// How far the top face of an `n³` block (element `i + n·((n − 1) + n·k)` at column `i`, row `k`) lies
+/// inside a ball of radius `r` centred at `ball` (y up), metres: 0 when no element is inside.
+pub fn deepest_inside_ball(pos: &[[f32; 3]], n: usize, ball: [f32; 3], r: f32) -> f32 {
+    let mut inside = 0.0f32;
+    for k in 0..n {
+        for i in 0..n {
+            let p = pos[i + n * ((n - 1) + n * k)];
+            let l2 = (p[0] - ball[0]).powi(2) + (p[2] - ball[2]).powi(2);
+            if l2 < r * r {
+                inside = inside.max(p[1] - (ball[1] - (r * r - l2).sqrt()));
+            }
+        }
+    }
+    inside
+}
