@@ -451,8 +451,16 @@ impl World {
 
     /// Refills a snapshot in place.
     pub fn snapshot_into(&self, out: &mut Snapshot) {
+        self.snapshot_raw_into(out);
+        self.tissue.mesh_recipe().finish(&mut out.layers);
+    }
+
+    /// [`World::snapshot_into`] with the layers' meshes filled raw ([`Tissue::fill_meshes_raw`]): what
+    /// the simulation thread publishes, finished by whoever reads it with
+    /// [`Tissue::mesh_recipe`](crate::tissue::Tissue::mesh_recipe), off the thread that steps.
+    pub fn snapshot_raw_into(&self, out: &mut Snapshot) {
         out.step = self.step;
-        self.tissue.fill_meshes(&mut out.layers);
+        self.tissue.fill_meshes_raw(&mut out.layers);
         self.tissue.fill_fibres(
             &mut out.fibres,
             &mut out.fibre_stretch,

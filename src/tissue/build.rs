@@ -567,6 +567,7 @@ impl Tissue {
             _ => super::scan::ScanTable::default(),
         };
         let mut tissue = Tissue {
+            mesh_recipe: std::sync::Arc::new(super::MeshRecipe::new(geometry, &layers)),
             scan_table,
             scan_spare: Default::default(),
             growth: Default::default(),

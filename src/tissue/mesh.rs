@@ -10,10 +10,89 @@ const OUTER_THICKNESS: f32 = 0.0006;
 /// Drawn thickness of the layers under it (an arachnoid is thinner), metres.
 const INNER_THICKNESS: f32 = 0.0003;
 
+/// What turns the meshes [`Tissue::fill_meshes_raw`] filled into what [`Tissue::fill_meshes`] fills:
+/// the lattice's map to the world and each layer's caps. It never changes for a tissue, so a thread
+/// that reads frames the simulation thread filled raw can finish them itself
+/// ([`crate::runner::Published`]): the simulation thread then only copies positions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshRecipe {
+    geometry: Geometry,
+    /// Per layer, each cap's ring as vertex indices of that layer's mesh.
+    caps: Vec<Vec<Vec<u32>>>,
+}
+
+impl MeshRecipe {
+    pub(crate) fn new(geometry: Geometry, layers: &[super::Layer]) -> Self {
+        let caps = layers
+            .iter()
+            .map(|layer| {
+                layer.caps.iter().map(|cap| cap.ring.iter().map(|&e| e - layer.first).collect()).collect()
+            })
+            .collect();
+        Self { geometry, caps }
+    }
+
+    /// Finishes meshes filled raw: their positions (lattice coordinates) mapped to the world, each
+    /// cap's pole vertex added, and the vertex normals. Meshes beyond the recipe's layers are left.
+    pub fn finish(&self, layers: &mut [LayerMesh]) {
+        for (slot, caps) in layers.iter_mut().zip(&self.caps) {
+            for p in &mut slot.positions {
+                *p = self.geometry.to_world(*p);
+            }
+            // Each cap's pole vertex follows the elements: the ring's centroid pushed out to the ring's
+            // mean distance from the centre of the surface.
+            for ring in caps {
+                let (mut c, mut r) = ([0.0f32; 3], 0.0f32);
+                for &v in ring {
+                    let p = slot.positions[v as usize];
+                    c = [c[0] + p[0], c[1] + p[1], c[2] + p[2]];
+                    r += (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                }
+                let m = ring.len().max(1) as f32;
+                let len = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt().max(f32::MIN_POSITIVE);
+                let s = r / m / len;
+                slot.positions.push([c[0] * s, c[1] * s, c[2] * s]);
+            }
+            slot.normals.clear();
+            slot.normals.resize(slot.positions.len(), [0.0; 3]);
+            for t in &slot.triangles {
+                let [a, b, c] = t.map(|v| slot.positions[v as usize]);
+                let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+                let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+                let f = [
+                    e1[1] * e2[2] - e1[2] * e2[1],
+                    e1[2] * e2[0] - e1[0] * e2[2],
+                    e1[0] * e2[1] - e1[1] * e2[0],
+                ];
+                for &v in t {
+                    let m = &mut slot.normals[v as usize];
+                    m[0] += f[0];
+                    m[1] += f[1];
+                    m[2] += f[2];
+                }
+            }
+            normalize_all(&mut slot.normals);
+        }
+    }
+}
+
 impl Tissue {
     /// Refills `out` with one mesh per layer, the upper layer first. Buffers are reused; triangles are
     /// rebuilt only when the topology changed since the mesh was last filled.
     pub fn fill_meshes(&self, out: &mut Vec<LayerMesh>) {
+        self.fill_meshes_raw(out);
+        self.mesh_recipe.finish(out);
+    }
+
+    /// What finishes the meshes [`Tissue::fill_meshes_raw`] fills.
+    pub fn mesh_recipe(&self) -> &std::sync::Arc<MeshRecipe> {
+        &self.mesh_recipe
+    }
+
+    /// [`Tissue::fill_meshes`] but for what [`MeshRecipe::finish`] does: the positions are the elements'
+    /// lattice coordinates (a copy), without the caps' poles, and the normals are left as they were.
+    /// Triangles, surface coordinates and the rest are filled.
+    pub fn fill_meshes_raw(&self, out: &mut Vec<LayerMesh>) {
         let nl = self.layers.len();
         out.truncate(nl);
         while out.len() < nl {
@@ -38,22 +117,7 @@ impl Tissue {
             let first = layer.first as usize;
             let n = layer.count as usize;
             slot.positions.clear();
-            slot.positions
-                .extend(self.body.positions()[first..first + n].iter().map(|&p| self.geometry.to_world(p)));
-            // Each cap's pole vertex follows the elements: the ring's centroid pushed out to the ring's
-            // mean distance from the centre of the surface.
-            for cap in &layer.caps {
-                let ring = cap.ring.iter().map(|&e| slot.positions[(e - layer.first) as usize]);
-                let (mut c, mut r) = ([0.0f32; 3], 0.0f32);
-                for p in ring {
-                    c = [c[0] + p[0], c[1] + p[1], c[2] + p[2]];
-                    r += (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-                }
-                let m = cap.ring.len().max(1) as f32;
-                let len = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt().max(f32::MIN_POSITIVE);
-                let s = r / m / len;
-                slot.positions.push([c[0] * s, c[1] * s, c[2] * s]);
-            }
+            slot.positions.extend_from_slice(&self.body.positions()[first..first + n]);
             if slot.topology_version != self.topology_version || slot.triangles.is_empty() {
                 slot.triangles.clear();
                 slot.triangles.extend(
@@ -78,7 +142,7 @@ impl Tissue {
                 }
                 slot.topology_version = self.topology_version;
             }
-            if slot.uv.len() != slot.positions.len() {
+            if slot.uv.len() != n + layer.caps.len() {
                 // Rest positions never change: the surface coordinates are filled once.
                 let rest = &self.body.lattice().rest_positions()[first..first + n];
                 slot.uv.clear();
@@ -95,25 +159,6 @@ impl Tissue {
                     slot.uv.push([sum[0] / m, sum[1] / m]);
                 }
             }
-            slot.normals.clear();
-            slot.normals.resize(slot.positions.len(), [0.0; 3]);
-            for t in &slot.triangles {
-                let [a, b, c] = t.map(|v| slot.positions[v as usize]);
-                let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-                let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-                let f = [
-                    e1[1] * e2[2] - e1[2] * e2[1],
-                    e1[2] * e2[0] - e1[0] * e2[2],
-                    e1[0] * e2[1] - e1[1] * e2[0],
-                ];
-                for &v in t {
-                    let m = &mut slot.normals[v as usize];
-                    m[0] += f[0];
-                    m[1] += f[1];
-                    m[2] += f[2];
-                }
-            }
-            normalize_all(&mut slot.normals);
         }
     }
 

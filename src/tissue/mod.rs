@@ -30,6 +30,7 @@ mod spec;
 pub use build::{LayeredSpec, TissueError, TissueSpec, VolumeSpec};
 pub use cut::{CutDepth, CutSegment};
 pub use fem_drive::{FEM_CUT_REFUSED, FemDrive, FemSpec};
+pub use mesh::MeshRecipe;
 pub use spec::{ConnectiveSpec, Edge, LayerSpec, Pinning};
 
 use glam::Vec3;
@@ -242,6 +243,8 @@ pub enum Model {
 #[derive(Clone, Debug)]
 pub struct Tissue {
     pub(crate) body: Body,
+    /// What finishes the meshes filled raw (the geometry and the layers' caps, which never change).
+    pub(crate) mesh_recipe: std::sync::Arc<MeshRecipe>,
     pub(crate) ws: Workspace,
     pub(crate) geometry: Geometry,
     pub(crate) layers: Vec<Layer>,

@@ -1,0 +1,69 @@
+//! What publishing a frame costs the simulation thread, and what finishing it costs the reader: plays
+//! the careful meninges script at a resolution and, every 16 steps (the thread publishes every sixtieth
+//! of a second at 1 kHz), times `Published::fill` (on the thread that steps), `Published::finish` (on
+//! the window's thread), and the parts of the fill: the raw snapshot, the assessment and the coach's
+//! advice. Prints mean, p50, p99 and max of each, microseconds:
+//! `target/release/examples/publish_cost 512 384`.
+use std::time::Instant;
+
+use dissect::runner::{Episode, Player, Published, Source};
+use dissect::scene::{Scene, Script, Tissue as SceneTissue};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let arg = |i: usize, d: u32| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
+    let (nu, nv) = (arg(1, 256), arg(2, 192));
+    let _pool = dissect::chainmail::worker_pool("publish")?;
+    let mut scene = Scene::from_str(include_str!("../scenes/meninges.ron"), "scenes/meninges.ron")?;
+    if let SceneTissue::Layers(l) = &mut scene.tissue {
+        l.resolution = [nu, nv];
+    }
+    let script =
+        Script::from_str(include_str!("../scenes/scripts/meninges_careful.ron"), "meninges_careful.ron")?;
+    let world = scene.build_world(false)?;
+    let assessor = scene.goals.clone().map(|g| dissect::training::Assessor::new(g, &world));
+    let mut episode = Episode::new(world, assessor, Source::Script(Player::new(script.0.clone())));
+    let (mut frame, mut scratch) = (Published::default(), Published::default());
+    let names = ["step", "fill", "finish", "raw snapshot", "assessment", "advice"];
+    let mut times: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
+    let us = |t: Instant| t.elapsed().as_secs_f64() * 1e6;
+    loop {
+        let t = Instant::now();
+        if episode.step().is_none() {
+            break;
+        }
+        times[0].push(us(t));
+        if !episode.world().step_count().is_multiple_of(16) {
+            continue;
+        }
+        let t = Instant::now();
+        frame.fill(&episode);
+        times[1].push(us(t));
+        let t = Instant::now();
+        frame.finish();
+        times[2].push(us(t));
+        let t = Instant::now();
+        episode.world().snapshot_raw_into(&mut scratch.snapshot);
+        times[3].push(us(t));
+        let t = Instant::now();
+        std::hint::black_box(episode.assessor().map(|a| a.assessment(episode.world())));
+        times[4].push(us(t));
+        let t = Instant::now();
+        std::hint::black_box(episode.assessor().and_then(|a| a.advice(episode.world())));
+        times[5].push(us(t));
+    }
+    println!("{nu} x {nv}: microseconds (mean, p50, p99, max)");
+    for (name, v) in names.iter().zip(&mut times) {
+        v.sort_by(|a, b| a.total_cmp(b));
+        let n = v.len().max(1);
+        let at = |q: f64| v.get(((n - 1) as f64 * q) as usize).copied().unwrap_or(0.0);
+        let mean = v.iter().sum::<f64>() / n as f64;
+        println!(
+            "{name:>13}: {mean:8.1} {:8.1} {:8.1} {:8.1}  ({} samples)",
+            at(0.5),
+            at(0.99),
+            at(1.0),
+            v.len()
+        );
+    }
+    Ok(())
+}
