@@ -1,8 +1,8 @@
 //! What publishing a frame costs the simulation thread, and what finishing it costs the reader: plays
 //! the careful meninges script at a resolution and, every 16 steps (the thread publishes every sixtieth
 //! of a second at 1 kHz), times `Published::fill` (on the thread that steps), `Published::finish` (on
-//! the window's thread), and the parts of the fill: the raw snapshot, the assessment and the coach's
-//! advice. Prints mean, p50, p99 and max of each, microseconds:
+//! the window's thread), and the parts of the fill: the raw snapshot (and within it the fibres and
+//! their tear stretch), the assessment and the coach's advice. Prints mean, p50, p99 and max of each, microseconds:
 //! `target/release/examples/publish_cost 512 384`.
 use std::time::Instant;
 
@@ -23,7 +23,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let assessor = scene.goals.clone().map(|g| dissect::training::Assessor::new(g, &world));
     let mut episode = Episode::new(world, assessor, Source::Script(Player::new(script.0.clone())));
     let (mut frame, mut scratch) = (Published::default(), Published::default());
-    let names = ["step", "fill", "finish", "raw snapshot", "assessment", "advice"];
+    let names =
+        ["step", "fill", "finish", "raw snapshot", " of it fibres", " tear stretch", "assessment", "advice"];
     let mut times: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
     let us = |t: Instant| t.elapsed().as_secs_f64() * 1e6;
     loop {
@@ -45,13 +46,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         episode.world().snapshot_raw_into(&mut scratch.snapshot);
         times[3].push(us(t));
         let t = Instant::now();
-        std::hint::black_box(episode.assessor().map(|a| a.assessment(episode.world())));
+        let s = &mut scratch.snapshot;
+        episode.world().tissue().fill_fibres_raw(&mut s.fibre_stretch);
         times[4].push(us(t));
         let t = Instant::now();
-        std::hint::black_box(episode.assessor().and_then(|a| a.advice(episode.world())));
+        std::hint::black_box(episode.world().tissue().fibre_tear_stretch());
         times[5].push(us(t));
+        let t = Instant::now();
+        std::hint::black_box(episode.assessor().map(|a| a.assessment(episode.world())));
+        times[6].push(us(t));
+        let t = Instant::now();
+        std::hint::black_box(episode.assessor().and_then(|a| a.advice(episode.world())));
+        times[7].push(us(t));
     }
-    println!("{nu} x {nv}: microseconds (mean, p50, p99, max)");
+    let fibres = scratch.snapshot.fibre_stretch.len();
+    println!("{nu} x {nv} ({fibres} fibres): microseconds (mean, p50, p99, max)");
     for (name, v) in names.iter().zip(&mut times) {
         v.sort_by(|a, b| a.total_cmp(b));
         let n = v.len().max(1);

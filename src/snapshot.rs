@@ -118,7 +118,8 @@ pub struct LayerMesh {
     pub normals: Vec<[f32; 3]>,
     /// Triangles as vertex indices. Triangles that would span a broken link are left out.
     pub triangles: Vec<[u32; 3]>,
-    /// Bumped whenever `triangles` changes (a cut or a tear), so index buffers are rebuilt only then.
+    /// A new number whenever `triangles` changes (a link between two of this layer's elements cut or
+    /// torn; a fibre's leaves it), one no other layer or tissue has: index buffers are rebuilt only then.
     pub topology_version: u64,
     /// Where each vertex sits on the surface at rest, fractions of the `u` and `v` extents (textures
     /// and regions are drawn in these coordinates, so they move with the tissue). One per position.

@@ -93,10 +93,12 @@ pub struct Body {
     /// How many links have broken (links never mend): with `boxes_epoch`, what the elastic cells
     /// depend on.
     pub(crate) broken: u64,
+    /// The broken links, in the order they broke (see [`Body::broken_links`]).
+    broken_links: Vec<LinkId>,
 }
 
 /// A number no earlier call returned (for [`Body::shape`] and [`Body::revision`]).
-pub(super) fn fresh_number() -> u64 {
+pub(crate) fn fresh_number() -> u64 {
     use std::sync::atomic::{AtomicU64, Ordering};
     static NEXT: AtomicU64 = AtomicU64::new(1);
     NEXT.fetch_add(1, Ordering::Relaxed)
@@ -171,6 +173,7 @@ impl Body {
             pairs: Default::default(),
             elastic: Default::default(),
             broken: 0,
+            broken_links: Vec::new(),
         };
         for l in 0..m {
             body.update_link_box(l);
@@ -530,12 +533,20 @@ impl Body {
         }
         self.link_state[i] = reason as u8;
         self.broken += 1;
+        self.broken_links.push(l);
         self.touch();
         for s in self.slots_of(i) {
             self.set_slot_class(s, 0);
         }
         self.update_pairs_of_link(i);
         Ok(true)
+    }
+
+    /// Every broken link, in the order they broke. Links never mend, so what was here stays, and what
+    /// breaks next is pushed on the end: a reader that keeps how many it has taken in reads only what
+    /// broke since (what the assessment does every step).
+    pub fn broken_links(&self) -> &[LinkId] {
+        &self.broken_links
     }
 
     /// Whether a link is broken, and why.

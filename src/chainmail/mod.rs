@@ -62,6 +62,7 @@ mod stencil;
 mod workspace;
 
 pub(crate) use body::INTACT;
+pub(crate) use body::fresh_number;
 pub use body::{Body, BreakReason};
 pub(crate) use cone::Press;
 pub use cone::{Cone, ConeLift, distances_plain, press_plain};

@@ -178,9 +178,9 @@ impl Published {
         let world = episode.world();
         world.snapshot_raw_into(&mut self.snapshot);
         self.unfinished = Some(std::sync::Arc::clone(world.tissue().mesh_recipe()));
-        episode.world().view_into(&mut self.view);
-        self.assessment = episode.assessor().map(|a| a.assessment(episode.world()));
-        self.advice = episode.assessor().and_then(|a| a.advice(episode.world()));
+        world.view_into(&mut self.view);
+        self.assessment = episode.assessor().map(|a| a.assessment(world));
+        self.advice = episode.assessor().and_then(|a| a.advice(world));
         self.recorded = episode.recorded();
         self.recording = episode.recorder().map(|r| r.path().to_path_buf());
         self.finished = episode.finished();
@@ -190,7 +190,7 @@ impl Published {
     /// [`Episode::snapshot_into`] gives.
     pub fn finish(&mut self) {
         if let Some(recipe) = self.unfinished.take() {
-            recipe.finish(&mut self.snapshot.layers);
+            recipe.finish_snapshot(&mut self.snapshot);
         }
     }
 }
@@ -687,6 +687,38 @@ mod tests {
                         let e = crate::chainmail::ElementId(layer.first + i as u32);
                         assert_eq!(Some(*p), tissue.world_position(e), "case {k}");
                     }
+                }
+                // And each intact connective link is a fibre between its ends in the world (the lower
+                // layer's first), stretched by their distance over its rest length; the others broke.
+                let (mut intact, mut broken) = (0, 0);
+                let snap = &frame.snapshot;
+                for l in 0..tissue.body().link_count() {
+                    let l = crate::chainmail::LinkId(l as u32);
+                    if tissue.link_kind(l) != Some(crate::tissue::LinkKind::Connective) {
+                        continue;
+                    }
+                    if let Some(why) = tissue.body().link_broken(l) {
+                        let got = snap.broken_fibres[broken].cut;
+                        assert_eq!(got, why == crate::chainmail::BreakReason::Cut, "case {k}");
+                        broken += 1;
+                        continue;
+                    }
+                    let [a, b] = tissue.body().lattice().link_ends(l).expect("ends");
+                    let [a, b] = if tissue.layer_of(a) > tissue.layer_of(b) { [a, b] } else { [b, a] };
+                    let ends = [a, b].map(|e| tissue.world_position(e).expect("element"));
+                    assert_eq!(snap.fibres[intact], ends, "case {k}: fibre {intact}");
+                    let d = (0..3).map(|i| (ends[1][i] - ends[0][i]).powi(2)).sum::<f32>().sqrt();
+                    let want = d / tissue.rest_len[l.index()];
+                    assert!(
+                        (snap.fibre_stretch[intact] - want).abs() <= 1e-6 * want,
+                        "case {k}: fibre {intact}"
+                    );
+                    intact += 1;
+                }
+                assert_eq!((snap.fibres.len(), snap.broken_fibres.len()), (intact, broken), "case {k}");
+                assert_eq!(snap.fibre_stretch.len(), intact);
+                if k == 0 && at == steps {
+                    assert!(intact > 0 && broken > 0, "the careful script cuts fibres");
                 }
             }
         }

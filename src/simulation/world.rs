@@ -452,21 +452,18 @@ impl World {
     /// Refills a snapshot in place.
     pub fn snapshot_into(&self, out: &mut Snapshot) {
         self.snapshot_raw_into(out);
-        self.tissue.mesh_recipe().finish(&mut out.layers);
+        self.tissue.mesh_recipe().finish_snapshot(out);
     }
 
-    /// [`World::snapshot_into`] with the layers' meshes filled raw ([`Tissue::fill_meshes_raw`]): what
-    /// the simulation thread publishes, finished by whoever reads it with
-    /// [`Tissue::mesh_recipe`](crate::tissue::Tissue::mesh_recipe), off the thread that steps.
+    /// [`World::snapshot_into`] with the layers' meshes and the fibres filled raw
+    /// ([`Tissue::fill_meshes_raw`], [`Tissue::fill_fibres_raw`]): what the simulation thread
+    /// publishes, finished by whoever reads it with
+    /// [`MeshRecipe::finish_snapshot`](crate::tissue::MeshRecipe::finish_snapshot) (the tissue's
+    /// [`Tissue::mesh_recipe`](crate::tissue::Tissue::mesh_recipe)), off the thread that steps.
     pub fn snapshot_raw_into(&self, out: &mut Snapshot) {
         out.step = self.step;
         self.tissue.fill_meshes_raw(&mut out.layers);
-        self.tissue.fill_fibres(
-            &mut out.fibres,
-            &mut out.fibre_stretch,
-            &mut out.fibre_sites,
-            &mut out.broken_fibres,
-        );
+        self.tissue.fill_fibres_raw(&mut out.fibre_stretch);
         out.fibre_tear_stretch = self.tissue.fibre_tear_stretch();
         out.instrument = Some(self.instrument.pose());
         out.clamped = None;

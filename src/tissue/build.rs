@@ -359,6 +359,7 @@ fn build_layered(s: &LayeredSpec) -> Result<Tissue, TissueError> {
             material: layer_material[k],
             triangles,
             grid: Some([nu as u32, nv as u32]),
+            version: crate::chainmail::fresh_number(),
         });
     }
     body.set_normal_pairs(&pairs)?;
@@ -475,6 +476,7 @@ fn build_volume(s: &VolumeSpec, step_seconds: f32) -> Result<Tissue, TissueError
         material: crate::chainmail::MaterialId(0),
         triangles,
         grid: None,
+        version: crate::chainmail::fresh_number(),
     }];
     let spacing = (0..3).map(|k| s.size[k] / (dims[k] - 1) as f32).fold(f32::MAX, f32::min);
     let model = match &s.fem {
@@ -567,7 +569,7 @@ impl Tissue {
             _ => super::scan::ScanTable::default(),
         };
         let mut tissue = Tissue {
-            mesh_recipe: std::sync::Arc::new(super::MeshRecipe::new(geometry, &layers)),
+            mesh_recipe: std::sync::Arc::new(super::MeshRecipe::empty(geometry)),
             scan_table,
             scan_spare: Default::default(),
             growth: Default::default(),
@@ -640,6 +642,7 @@ impl Tissue {
         tissue.fit_coarse();
         tissue.repair.fit(n);
         tissue.fibre_sites = tissue.rest_fibre_sites();
+        tissue.mesh_recipe = std::sync::Arc::new(super::MeshRecipe::new(&tissue));
         // What the first step would otherwise do over the whole body: measure the drift from rest
         // and size a lift's cone (a step then touches only what moves).
         tissue.drift();

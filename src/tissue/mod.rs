@@ -188,6 +188,10 @@ pub struct Layer {
     /// that no link is degenerate): each ring's elements in order, the links between neighbours, and
     /// whether the fan's winding must be flipped to face outwards.
     pub(crate) caps: Vec<Cap>,
+    /// Which of its triangles are drawn: a new number whenever a link between two of its elements
+    /// breaks, one no other layer or tissue has (a fibre cut leaves both layers' triangles as they
+    /// were, so neither the published frame nor the renderer rebuilds them).
+    pub(crate) version: u64,
 }
 
 /// A ring of elements closed by a fan round a vertex drawn at the ring's pole.
@@ -1130,6 +1134,12 @@ impl Tissue {
         }
         self.events.push(TopologyEvent { link: l, kind, reason });
         self.topology_version += 1;
+        if let Some([a, b]) = self.body.lattice().link_ends(l)
+            && let Some(layer) = self.layers.iter_mut().find(|y| a.0.wrapping_sub(y.first) < y.count)
+            && b.0.wrapping_sub(layer.first) < layer.count
+        {
+            layer.version = crate::chainmail::fresh_number();
+        }
         if let Some([a, b]) = self.body.lattice().link_ends(l) {
             self.activate(a.0);
             self.activate(b.0);

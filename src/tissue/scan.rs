@@ -379,7 +379,7 @@ fn scan_link(k: &ScanLink, d2: f32, max_stretch2: &mut f32, hits: &mut Vec<LinkI
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::chainmail::{BreakReason, Material, MaterialId};
     use crate::surface::Surface;
@@ -394,7 +394,8 @@ mod tests {
         }
     }
 
-    fn tissue() -> Tissue {
+    /// Two layers (12 × 10, a dura over an arachnoid) joined by fibres, pinned at the edges.
+    pub(in crate::tissue) fn tissue() -> Tissue {
         Tissue::build(&TissueSpec::Layered(LayeredSpec {
             surface: Surface::Plane { width: 0.06, depth: 0.06 },
             resolution: [12, 10],

@@ -9,6 +9,7 @@ mod force;
 mod goals;
 mod plot;
 mod report;
+mod tally;
 
 pub use coach::{Advice, AdviceLevel};
 pub use force::{ForceAssessment, ForceStats, InstrumentForce};
@@ -20,7 +21,7 @@ pub use report::{
 use glam::Vec2;
 use serde::{Deserialize, Serialize};
 
-use crate::chainmail::{BreakReason, LinkId};
+use crate::chainmail::LinkId;
 use crate::simulation::{InstrumentKind, World};
 use crate::tissue::{LinkKind, Tissue};
 
@@ -171,15 +172,6 @@ struct Rates {
 
 const RATES: Rates = Rates { layer_cut: 1.6, fibre_cut: 0.3, forbidden: [4.0, 1.5], torn: [1.6, 0.6] };
 
-/// A link and how much tissue it stands for, in millimetres (a layer's on a surface) or square
-/// millimetres.
-type Weighted = (LinkId, f32);
-
-/// How many of `links` are broken (by `broken`'s test), and the sum of their weights.
-fn broken_extent(links: &[Weighted], broken: impl Fn(LinkId) -> bool) -> (u32, f32) {
-    links.iter().filter(|(l, _)| broken(*l)).fold((0, 0.0), |(n, sum), (_, w)| (n + 1, sum + w))
-}
-
 /// "2.5 mm of layer and 3.0 mm² of fibres" for a layer's amount in millimetres (square millimetres
 /// when `areas`) and a fibres' in square millimetres, leaving out a part that is nothing ("none" when
 /// both are).
@@ -243,16 +235,13 @@ pub struct Assessor {
     target_m2: f32,
     /// Element pairs (lower, upper) in the target, for the separation.
     target_pairs: Vec<(u32, u32)>,
-    /// Connective links outside the target, with their area (mm²).
-    outside: Vec<Weighted>,
-    /// Links in a forbidden region: in-layer links, then connective ones.
-    forbidden: [Vec<Weighted>; 2],
-    /// In-layer links whose cutting is damage (all but the upper layer's along the planned incision).
-    penalised: Vec<Weighted>,
+    /// What each link counts for: under the target, outside it, in a forbidden region, damage when
+    /// cut, a point of the planned incision.
+    roles: tally::Roles,
+    /// What the links broken so far count for, taken in every step.
+    tally: tally::Tally,
     /// Whether a layer's amounts are areas (a volume) rather than lengths (a surface).
     layers_are_areas: bool,
-    /// For each point of the planned incision, the upper-layer links whose cut counts for it.
-    incision: Vec<Vec<LinkId>>,
     rest_gap: f32,
     /// Steps observed.
     steps: u64,
@@ -311,33 +300,37 @@ impl Assessor {
         if let Some(&last) = line.last() {
             points.push(last);
         }
-        let mut incision = vec![Vec::new(); points.len()];
         // Layers count from the upper one.
         let upper = LinkKind::Layer(0);
-        let (mut target, mut outside, mut target_pairs) = (vec![], vec![], vec![]);
-        let (mut penalised, mut forbidden) = (vec![], [vec![], vec![]]);
+        let (mut target, mut target_pairs) = (vec![], vec![]);
         let layers_are_areas = matches!(tissue.geometry(), crate::tissue::Geometry::Volume);
-        let layer_unit = layer_unit(layers_are_areas);
+        let mut roles = tally::Roles {
+            bits: vec![0; tissue.body().link_count()],
+            incision: Vec::new(),
+            points: points.len(),
+            layer_unit: layer_unit(layers_are_areas),
+        };
         let mut rest_gap = 0.0;
-        for l in 0..tissue.body().link_count() {
+        for (l, bits) in roles.bits.iter_mut().enumerate() {
             let id = LinkId(l as u32);
             let Some([a, b]) = tissue.body().lattice().link_ends(id) else { continue };
             let (pa, pb) = (rest[a.index()], rest[b.index()]);
             let mid = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2])];
             let (u, v) = tissue.surface_fractions(mid);
             let connective = tissue.link_kind(id) == Some(LinkKind::Connective);
-            let extent = tissue.link_extent(id) * if connective { 1e6 } else { layer_unit };
             if goals.forbidden.iter().any(|r| r.contains(u, v)) {
-                forbidden[usize::from(connective)].push((id, extent));
+                *bits |= if connective { tally::FORBIDDEN_FIBRE } else { tally::FORBIDDEN_LAYER };
             }
             match tissue.link_kind(id) {
                 Some(LinkKind::Connective) => {
+                    *bits |= tally::CONNECTIVE;
                     if goals.target.contains(u, v) {
+                        *bits |= tally::TARGET;
                         target.push(id);
                         target_pairs.push((a.0, b.0));
                         rest_gap = (pb[2] - pa[2]).abs();
                     } else {
-                        outside.push((id, extent));
+                        *bits |= tally::OUTSIDE;
                     }
                 }
                 Some(kind) => {
@@ -347,12 +340,13 @@ impl Assessor {
                             .windows(2)
                             .any(|w| point_segment_dist(m, w[0], w[1]) <= INCISION_ALLOWANCE * judged);
                     if !near {
-                        penalised.push((id, extent));
+                        *bits |= tally::PENALISED;
                     }
                     if kind == upper {
                         for (k, p) in points.iter().enumerate() {
                             if m.distance_squared(*p) <= (INCISION_REACH * judged).powi(2) {
-                                incision[k].push(id);
+                                *bits |= tally::INCISION;
+                                roles.incision.push((id.0, k as u32));
                             }
                         }
                     }
@@ -360,6 +354,8 @@ impl Assessor {
                 None => {}
             }
         }
+        let mut tally = tally::Tally::default();
+        tally.absorb(&roles, tissue);
         let target_m2 = target.iter().fold(0.0, |sum, &l| sum + tissue.link_extent(l));
         let tissue = world.tissue();
         let in_forbidden =
@@ -372,11 +368,9 @@ impl Assessor {
             target,
             target_m2,
             target_pairs,
-            outside,
-            forbidden,
-            penalised,
+            roles,
+            tally,
             layers_are_areas,
-            incision,
             rest_gap,
             steps: 0,
             started_at: None,
@@ -415,6 +409,7 @@ impl Assessor {
     /// Call after every step.
     pub fn observe(&mut self, world: &World) {
         self.steps += 1;
+        self.tally.absorb(&self.roles, world.tissue());
         let inst = world.instrument();
         if self.started_at.is_none() {
             let pushing = inst.kind == InstrumentKind::Probe && world.last_step().moved_chain > 0;
@@ -494,23 +489,24 @@ impl Assessor {
         (3.0 / self.dt) as u64
     }
 
+    /// What the links broken so far count for, with anything broken since the last step.
+    fn tally(&self, tissue: &Tissue) -> std::borrow::Cow<'_, tally::Tally> {
+        self.tally.now(&self.roles, tissue)
+    }
+
+    /// The share of the target's fibres cut, and how many.
     fn fibre_share(&self, tissue: &Tissue) -> (f32, u32) {
-        let cut = self.target.iter().filter(|&&l| !tissue.body().link_intact(l)).count() as u32;
+        let cut = self.tally(tissue).target;
         let share = if self.target.is_empty() { 0.0 } else { cut as f32 / self.target.len() as f32 };
         (share, cut)
     }
 
     fn incision_share(&self, tissue: &Tissue) -> Option<f32> {
-        if self.incision.is_empty() {
-            return None;
-        }
-        let body = tissue.body();
-        let cut = self
-            .incision
-            .iter()
-            .filter(|links| links.iter().any(|&l| body.link_broken(l) == Some(BreakReason::Cut)))
-            .count();
-        Some(cut as f32 / self.incision.len() as f32)
+        Self::incision_of(&self.tally(tissue), self.roles.points)
+    }
+
+    fn incision_of(tally: &tally::Tally, points: usize) -> Option<f32> {
+        (points > 0).then(|| tally.incision as f32 / points as f32)
     }
 
     /// (completion, incision share, fibre share, target fibres cut).
@@ -540,17 +536,16 @@ impl Assessor {
     pub fn assessment(&self, world: &World) -> Assessment {
         let tissue = world.tissue();
         let (completion, incision, fibres, cut) = self.completion(tissue);
-        let body = tissue.body();
         let separation = self.separation(tissue);
         let damage = tissue.damage();
-        let is_cut = |l: LinkId| body.link_broken(l) == Some(BreakReason::Cut);
-        let is_broken = |l: LinkId| body.link_broken(l).is_some();
         // Links broken, and the same damage in physical amounts (mm of a layer on a surface, mm²
         // otherwise).
-        let (layer_cut, layer_mm) = broken_extent(&self.penalised, is_cut);
-        let (outside, outside_mm2) = broken_extent(&self.outside, is_broken);
+        let tally = self.tally(tissue);
+        let amount_of = |(n, sum): (u32, f64)| (n, sum as f32);
+        let (layer_cut, layer_mm) = amount_of(tally.layer_cut);
+        let (outside, outside_mm2) = amount_of(tally.outside);
         let [(forbidden_layer, forbidden_layer_mm), (forbidden_fibres, forbidden_fibres_mm2)] =
-            self.forbidden.each_ref().map(|links| broken_extent(links, is_broken));
+            tally.forbidden.map(amount_of);
         let (forbidden, forbidden_mm) =
             (forbidden_layer + forbidden_fibres, [forbidden_layer_mm, forbidden_fibres_mm2]);
         let torn_mm = self.torn(&damage);
@@ -801,12 +796,93 @@ mod tests {
         assert_eq!(volume.amount(4e-6, 0.0), "4.0 mm² of layer");
     }
 
+    /// The tally the assessor takes in as links break (each step reading only what broke since) is
+    /// what reading every link finds, every 10 steps of sessions that cut the target's fibres, cut
+    /// an incision, slip into a forbidden region and tear; and nothing broken reads as zero, not
+    /// negative zero (shown as "-0.0" otherwise).
     #[test]
-    fn broken_extent_sums_only_the_broken_links() {
-        let links = [(LinkId(0), 1.5), (LinkId(1), 2.0), (LinkId(2), 0.25)];
-        assert_eq!(broken_extent(&links, |l| l.0 != 1), (2, 1.75));
-        // Nothing broken is zero, not negative zero (shown as "-0.0" otherwise).
-        assert!(broken_extent(&links, |_| false).1.is_sign_positive());
+    fn the_tally_taken_in_as_links_break_is_what_reading_every_link_finds() {
+        use crate::chainmail::BreakReason;
+        use crate::runner::{Episode, Player, Source};
+        use crate::scene::{Scene, Script, Tissue as SceneTissue};
+        let near = |x: (u32, f64), y: (u32, f64)| x.0 == y.0 && (x.1 - y.1).abs() <= 1e-9 * y.1.abs();
+        let same = |kept: &tally::Tally, read: &tally::Tally| {
+            kept.target == read.target
+                && kept.incision == read.incision
+                && near(kept.layer_cut, read.layer_cut)
+                && near(kept.outside, read.outside)
+                && near(kept.forbidden[0], read.forbidden[0])
+                && near(kept.forbidden[1], read.forbidden[1])
+        };
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+        let mut seen = tally::Tally::default();
+        let mut most = |t: &tally::Tally| {
+            seen.target = seen.target.max(t.target);
+            seen.incision = seen.incision.max(t.incision);
+            let [f0, f1] = &mut seen.forbidden;
+            for (m, x) in [
+                (&mut seen.layer_cut, t.layer_cut),
+                (&mut seen.outside, t.outside),
+                (f0, t.forbidden[0]),
+                (f1, t.forbidden[1]),
+            ] {
+                m.0 = m.0.max(x.0);
+            }
+        };
+        for (scene, script) in [
+            ("meninges", "meninges_careful"),
+            ("meninges", "meninges_careless"),
+            ("meninges", "meninges_slips"),
+            ("durotomy", "durotomy_careful"),
+            ("durotomy", "durotomy_careless"),
+        ] {
+            let mut scene = Scene::load(dir.join(format!("{scene}.ron"))).expect("scene");
+            if let SceneTissue::Layers(l) = &mut scene.tissue {
+                l.resolution = [48, 36];
+            }
+            let script = Script::load(dir.join(format!("scripts/{script}.ron"))).expect("script");
+            let world = scene.build_world(false).expect("world");
+            let assessor = scene.goals.clone().map(|g| Assessor::new(g, &world));
+            let mut episode = Episode::new(world, assessor, Source::Script(Player::new(script.0)));
+            let zero = episode.assessor().expect("goals").assessment(episode.world());
+            assert!(zero.layer_cut.is_sign_positive() && zero.connective_cut_outside_m2.is_sign_positive());
+            let mut steps = 0;
+            loop {
+                let done = episode.step().is_none();
+                steps += 1;
+                if done || steps % 10 == 0 {
+                    let a = episode.assessor().expect("goals");
+                    let tissue = episode.world().tissue();
+                    let (kept, read) = (a.tally(tissue), tally::Tally::scan(&a.roles, tissue));
+                    assert!(same(&kept, &read), "step {steps}: {kept:?} against {read:?}");
+                    most(&read);
+                }
+                if done {
+                    break;
+                }
+            }
+            // Then tears and cuts everywhere, as no script makes them: a tear along the incision or
+            // where cutting is damage counts for neither (the scripts tear nothing now).
+            for (every, reason) in [(7, BreakReason::Tear), (11, BreakReason::Cut)] {
+                let body = episode.world_mut().tissue_mut().body_mut();
+                for l in (0..body.link_count()).step_by(every) {
+                    body.break_link(LinkId(l as u32), reason).expect("a link");
+                }
+                let a = episode.assessor().expect("goals");
+                let tissue = episode.world().tissue();
+                let (kept, read) = (a.tally(tissue), tally::Tally::scan(&a.roles, tissue));
+                assert!(same(&kept, &read), "{reason:?}: {kept:?} against {read:?}");
+            }
+        }
+        // Every kind of damage and progress was there to count.
+        assert!(
+            seen.target > 0
+                && seen.incision > 0
+                && seen.layer_cut.0 > 0
+                && seen.outside.0 > 0
+                && seen.forbidden.iter().any(|f| f.0 > 0),
+            "{seen:?}"
+        );
     }
 
     /// The separation's advice states the panel's figure, pressed together included.
