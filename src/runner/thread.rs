@@ -9,8 +9,9 @@
 //! episode's recorder writes it with the step it was given at, so a session recorded through the
 //! thread replays bit for bit however late the input came. The windows read the latest [`Published`]
 //! frame (snapshot, world view, assessment, pace) through a wait-free triple buffer (`triple_buffer`):
-//! the thread never waits for them, and refills the frame every sixtieth of a second (so a frame read
-//! is at most that old, plus a step). Messages for the window (a device dropped, a recording that
+//! the thread never waits for them, and refills the frame every sixtieth of a second, in the gap
+//! between two steps when the fill fits there (so a frame read is at most that old, plus
+//! [`PUBLISH_WAIT`] and a step). Messages for the window (a device dropped, a recording that
 //! stopped, a notice of the tissue) come back as [`Event`]s.
 //!
 //! Must not import wgpu, winit or egui.
@@ -33,6 +34,10 @@ use crate::training::{Assessment, Report};
 
 /// How often the thread refills the published frame while it steps.
 pub const PUBLISH_EVERY: Duration = Duration::from_micros(16_667);
+/// How long past its time a frame may wait for a gap between two steps that it fits in (the last fill
+/// took less than what is left before the next deadline), so that filling it holds no step back; a
+/// frame that has waited this long is filled at once.
+pub const PUBLISH_WAIT: Duration = Duration::from_millis(8);
 /// How late the thread may fall before it gives up the steps it missed (it then runs behind real
 /// time, and says so, instead of running a burst of steps to catch up).
 pub const MAX_LAG: Duration = Duration::from_millis(50);
@@ -514,6 +519,8 @@ fn run(
     let (mut period, mut meter) = pace(&episode, speed);
     let mut deadline = Instant::now();
     let mut last_publish: Option<Instant> = None;
+    // How long the last frame took to fill.
+    let mut fill_took = Duration::ZERO;
     let mut dirty = true;
     loop {
         loop {
@@ -608,9 +615,18 @@ fn run(
             deadline = end;
             meter.behind = true;
         }
-        let due = last_publish.is_none_or(|t| end - t >= PUBLISH_EVERY);
-        if dirty && due {
+        // A frame due is filled in the gap before the next deadline if it fits there, or once it has
+        // waited `PUBLISH_WAIT` (a thread whose steps leave no such gap).
+        let since = last_publish.map(|t| end.saturating_duration_since(t));
+        let fits = deadline.saturating_duration_since(Instant::now()) >= fill_took + spin;
+        let (due, overdue) = match since {
+            None => (true, true),
+            Some(s) => (s >= PUBLISH_EVERY, s >= PUBLISH_EVERY + PUBLISH_WAIT),
+        };
+        if dirty && due && (fits || overdue) {
+            let filled = Instant::now();
             publish(&mut publisher, &episode, &meter, &control);
+            fill_took = filled.elapsed();
             last_publish = Some(end);
             dirty = false;
         }

@@ -1,0 +1,59 @@
+//! The simulation thread's timing while a trainee works: the careful meninges script played on the
+//! thread (`runner::SimThread`) at 1 kHz, at a resolution, while this thread takes the published frame
+//! sixty times a second and finishes it as the windows do. Prints the lateness of the steps' starts
+//! after their deadlines over the whole session (p99 and worst), what the thread reports, and the
+//! score: `target/release/examples/thread_pace 512 384`. Publishing a frame is the thread's work too,
+//! so this is where its cost shows; the exercise benches and `dissect run` step without publishing.
+use std::time::{Duration, Instant};
+
+use dissect::runner::{Episode, Player, SimThread, Source};
+use dissect::scene::{Scene, Script, Tissue as SceneTissue};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let arg = |i: usize, d: u32| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
+    let (nu, nv) = (arg(1, 256), arg(2, 192));
+    let mut scene = Scene::from_str(include_str!("../scenes/meninges.ron"), "scenes/meninges.ron")?;
+    if let SceneTissue::Layers(l) = &mut scene.tissue {
+        l.resolution = [nu, nv];
+    }
+    let script =
+        Script::from_str(include_str!("../scenes/scripts/meninges_careful.ron"), "meninges_careful.ron")?;
+    let world = scene.build_world(false)?;
+    let assessor = scene.goals.clone().map(|g| dissect::training::Assessor::new(g, &world));
+    let episode = Episode::new(world, assessor, Source::Script(Player::new(script.0)));
+    let mut sim = SimThread::spawn(episode)?;
+    let (t, mut frames) = (Instant::now(), 0u32);
+    let trace = std::env::var_os("TRACE").is_some();
+    while !sim.latest().finished {
+        frames += 1;
+        if trace {
+            let f = sim.latest();
+            eprintln!(
+                "{} {:.0} {:.0} {}",
+                f.view.step_count(),
+                f.pace.worst_late_us,
+                f.pace.p99_late_us,
+                f.pace.realtime
+            );
+        }
+        if t.elapsed() > Duration::from_secs(120) {
+            return Err("the session did not end within two minutes".into());
+        }
+        std::thread::sleep(Duration::from_millis(16));
+    }
+    let frame = sim.latest();
+    let (pace, score) = (frame.pace, frame.assessment.as_ref().map_or(0.0, |a| a.score));
+    println!(
+        "{nu} x {nv}: {} steps in {:.2} s, lateness of a step's start p99 {:.0} µs (last second: p99 {:.0}, worst {:.0} µs), \
+         mean step {:.0} µs, {frames} frames read, score {score:.2}, {}",
+        pace.total_steps,
+        t.elapsed().as_secs_f64(),
+        pace.total_p99_late_us,
+        pace.p99_late_us,
+        pace.worst_late_us,
+        pace.mean_step_us,
+        sim.scheduling()
+    );
+    let _ = sim.stop();
+    Ok(())
+}
