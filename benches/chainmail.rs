@@ -10,7 +10,7 @@ use dissect::chainmail::{
     Body, Cone, ElementId, Lattice, Material, Pass, RelaxBudget, RelaxRegion, Workspace,
 };
 use dissect::runner::Player;
-use dissect::scene::{Scene, Script, Tissue as SceneTissue};
+use dissect::scene::{Scene, Script};
 
 /// A small deterministic generator, so the benches' inputs are seeded.
 struct Lcg(u64);
@@ -115,10 +115,9 @@ fn benches(c: &mut Criterion) {
 
 /// The meninges' body and the elements the forceps hold at step `at` of the careful script, at `nu × nv`.
 fn held_at(nu: u32, nv: u32, at: u64) -> (Body, Vec<ElementId>) {
-    let mut scene = Scene::from_str(include_str!("../scenes/meninges.ron"), "meninges.ron").expect("scene");
-    if let SceneTissue::Layers(l) = &mut scene.tissue {
-        l.resolution = [nu, nv];
-    }
+    let scene = Scene::from_str(include_str!("../scenes/meninges.ron"), "meninges.ron")
+        .expect("scene")
+        .with_resolution(nu, nv);
     let script =
         Script::from_str(include_str!("../scenes/scripts/meninges_careful.ron"), "careful").expect("script");
     let mut world = scene.build_world(false).expect("world");

@@ -32,12 +32,7 @@ const VOLUME_SCRIPT: &str = include_str!("../scenes/scripts/volume.ron");
 
 /// The scene at `nu × nv` per layer; a volume at `nu × nu × nu` (`nv` unused).
 fn scene_at(text: &str, nu: u32, nv: u32) -> Scene {
-    let mut scene = Scene::from_str(text, "scene").expect("scene");
-    match &mut scene.tissue {
-        SceneTissue::Layers(l) => l.resolution = [nu, nv],
-        SceneTissue::Volume(v) => v.resolution = [nu; 3],
-    }
-    scene
+    Scene::from_str(text, "scene").expect("scene").with_resolution(nu, nv)
 }
 
 /// The elements of `scene` at that size: two layers, or a volume's cube.

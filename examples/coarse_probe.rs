@@ -11,7 +11,7 @@
 //! `cargo run --release --example coarse_probe -- 512 384 1450 2,4,8`
 use dissect::chainmail::ElementId;
 use dissect::runner::Player;
-use dissect::scene::{Scene, Script, Tissue as SceneTissue};
+use dissect::scene::{Scene, Script};
 
 const MENINGES: &str = include_str!("../scenes/meninges.ron");
 const CAREFUL: &str = include_str!("../scenes/scripts/meninges_careful.ron");
@@ -24,10 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map(|a| a.split(',').filter_map(|f| f.trim().parse().ok()).filter(|&f| f >= 2).collect())
         .unwrap_or_else(|| vec![2, 4, 8]);
     let _pool = dissect::chainmail::worker_pool("probe")?;
-    let mut scene = Scene::from_str(MENINGES, "scenes/meninges.ron")?;
-    if let SceneTissue::Layers(l) = &mut scene.tissue {
-        l.resolution = [nu as u32, nv as u32];
-    }
+    let scene = Scene::from_str(MENINGES, "scenes/meninges.ron")?.with_resolution(nu as u32, nv as u32);
     let script = Script::from_str(CAREFUL, "meninges_careful.ron")?;
     let mut world = scene.build_world(false)?;
     let mut player = Player::new(script.0.clone());

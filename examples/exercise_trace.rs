@@ -13,7 +13,7 @@
 use std::time::Instant;
 
 use dissect::runner::Player;
-use dissect::scene::{Scene, Script, Tissue as SceneTissue};
+use dissect::scene::{Scene, Script};
 
 const MENINGES: &str = include_str!("../scenes/meninges.ron");
 const CAREFUL: &str = include_str!("../scenes/scripts/meninges_careful.ron");
@@ -47,10 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(ms) = std::env::var("TRACE_WAIT_MS").ok().and_then(|m| m.parse().ok()) {
         std::thread::sleep(std::time::Duration::from_millis(ms));
     }
-    let mut scene = Scene::from_str(&scene_text, &scene_name)?;
-    if let SceneTissue::Layers(l) = &mut scene.tissue {
-        l.resolution = [nu, nv];
-    }
+    let scene = Scene::from_str(&scene_text, &scene_name)?.with_resolution(nu, nv);
     let script = Script::from_str(&script_text, &script_name)?;
     let mut world = scene.build_world(false)?;
     let mut player = Player::new(script.0.clone());

@@ -6,22 +6,15 @@
 //! `target/release/examples/publish_cost 512 384`.
 use std::time::Instant;
 
-use dissect::runner::{Episode, Player, Published, Source};
-use dissect::scene::{Scene, Script, Tissue as SceneTissue};
+use dissect::runner::Published;
+
+mod common;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = |i: usize, d: u32| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
     let (nu, nv) = (arg(1, 256), arg(2, 192));
     let _pool = dissect::chainmail::worker_pool("publish")?;
-    let mut scene = Scene::from_str(include_str!("../scenes/meninges.ron"), "scenes/meninges.ron")?;
-    if let SceneTissue::Layers(l) = &mut scene.tissue {
-        l.resolution = [nu, nv];
-    }
-    let script =
-        Script::from_str(include_str!("../scenes/scripts/meninges_careful.ron"), "meninges_careful.ron")?;
-    let world = scene.build_world(false)?;
-    let assessor = scene.goals.clone().map(|g| dissect::training::Assessor::new(g, &world));
-    let mut episode = Episode::new(world, assessor, Source::Script(Player::new(script.0.clone())));
+    let mut episode = common::careful_episode(nu, nv)?;
     let (mut frame, mut scratch) = (Published::default(), Published::default());
     let names =
         ["step", "fill", "finish", "raw snapshot", " of it fibres", " tear stretch", "assessment", "advice"];

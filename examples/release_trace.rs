@@ -4,7 +4,7 @@
 //! after it drags the dura 5 mm sideways instead of lifting it).
 use std::time::Instant;
 
-use dissect::scene::{Scene, Tissue as SceneTissue};
+use dissect::scene::Scene;
 use dissect::simulation::{Command, InstrumentKind, World};
 
 const MENINGES: &str = include_str!("../scenes/meninges.ron");
@@ -15,10 +15,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The steps run on a worker of a pool of their own, as the trainer's simulation thread and
     // `dissect run` run them (see `exercise_trace`).
     let _pool = dissect::chainmail::worker_pool("trace")?;
-    let mut scene = Scene::from_str(MENINGES, "scenes/meninges.ron")?;
-    if let SceneTissue::Layers(l) = &mut scene.tissue {
-        l.resolution = [nu, nv];
-    }
+    let scene = Scene::from_str(MENINGES, "scenes/meninges.ron")?.with_resolution(nu, nv);
     let mut world = scene.build_world(false)?;
     let t = world.tissue();
     let first = t.layers().first().ok_or("no layer")?.first as usize;

@@ -6,22 +6,14 @@
 //! so this is where its cost shows; the exercise benches and `dissect run` step without publishing.
 use std::time::{Duration, Instant};
 
-use dissect::runner::{Episode, Player, SimThread, Source};
-use dissect::scene::{Scene, Script, Tissue as SceneTissue};
+use dissect::runner::SimThread;
+
+mod common;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = |i: usize, d: u32| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
     let (nu, nv) = (arg(1, 256), arg(2, 192));
-    let mut scene = Scene::from_str(include_str!("../scenes/meninges.ron"), "scenes/meninges.ron")?;
-    if let SceneTissue::Layers(l) = &mut scene.tissue {
-        l.resolution = [nu, nv];
-    }
-    let script =
-        Script::from_str(include_str!("../scenes/scripts/meninges_careful.ron"), "meninges_careful.ron")?;
-    let world = scene.build_world(false)?;
-    let assessor = scene.goals.clone().map(|g| dissect::training::Assessor::new(g, &world));
-    let episode = Episode::new(world, assessor, Source::Script(Player::new(script.0)));
-    let mut sim = SimThread::spawn(episode)?;
+    let mut sim = SimThread::spawn(common::careful_episode(nu, nv)?)?;
     let (t, mut frames) = (Instant::now(), 0u32);
     let trace = std::env::var_os("TRACE").is_some();
     // READ_EVERY=n: the reader looks only at every n-th frame time (1 as the windows do), to see what

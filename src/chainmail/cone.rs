@@ -1139,12 +1139,9 @@ mod tests {
     /// The meninges' two layers at `res` (links, fibres and normal pairs, two materials), with the
     /// links crossing a line cut.
     fn meninges(res: [u32; 2]) -> Body {
-        let mut scene =
-            crate::scene::Scene::from_str(include_str!("../../scenes/meninges.ron"), "meninges.ron")
-                .expect("scene");
-        if let crate::scene::Tissue::Layers(l) = &mut scene.tissue {
-            l.resolution = res;
-        }
+        let scene = crate::scene::Scene::from_str(include_str!("../../scenes/meninges.ron"), "meninges.ron")
+            .expect("scene")
+            .with_resolution(res[0], res[1]);
         let world = scene.build_world(false).expect("world");
         let mut body = world.tissue().body().clone();
         let nx = res[0] as usize;

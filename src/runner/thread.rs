@@ -704,37 +704,29 @@ mod tests {
                         assert_eq!(Some(*p), tissue.world_position(e), "case {k}");
                     }
                 }
-                // And each intact connective link is a fibre between its ends in the world (the lower
-                // layer's first), stretched by their distance over its rest length; the others broke.
-                let (mut intact, mut broken) = (0, 0);
+                // And the fibres are what the tissue's direct path fills (its reference: each intact
+                // fibre between its ends in the world, the lower layer's first, stretched by their
+                // distance over its rest length; the others cut or torn), bit for bit.
                 let snap = &frame.snapshot;
-                for l in 0..tissue.body().link_count() {
-                    let l = crate::chainmail::LinkId(l as u32);
-                    if tissue.link_kind(l) != Some(crate::tissue::LinkKind::Connective) {
-                        continue;
-                    }
-                    if let Some(why) = tissue.body().link_broken(l) {
-                        let got = snap.broken_fibres[broken].cut;
-                        assert_eq!(got, why == crate::chainmail::BreakReason::Cut, "case {k}");
-                        broken += 1;
-                        continue;
-                    }
-                    let [a, b] = tissue.body().lattice().link_ends(l).expect("ends");
-                    let [a, b] = if tissue.layer_of(a) > tissue.layer_of(b) { [a, b] } else { [b, a] };
-                    let ends = [a, b].map(|e| tissue.world_position(e).expect("element"));
-                    assert_eq!(snap.fibres[intact], ends, "case {k}: fibre {intact}");
-                    let d = (0..3).map(|i| (ends[1][i] - ends[0][i]).powi(2)).sum::<f32>().sqrt();
-                    let want = d / tissue.rest_len[l.index()];
-                    assert!(
-                        (snap.fibre_stretch[intact] - want).abs() <= 1e-6 * want,
-                        "case {k}: fibre {intact}"
-                    );
-                    intact += 1;
-                }
-                assert_eq!((snap.fibres.len(), snap.broken_fibres.len()), (intact, broken), "case {k}");
-                assert_eq!(snap.fibre_stretch.len(), intact);
+                let (mut fibres, mut stretch, mut sites, mut broken) = Default::default();
+                tissue.fill_fibres(&mut fibres, &mut stretch, &mut sites, &mut broken);
+                assert_eq!(snap.fibres, fibres, "case {k}: fibres");
+                assert_eq!(snap.fibre_stretch, stretch, "case {k}: stretch");
+                assert_eq!(snap.fibre_sites, sites, "case {k}: sites");
+                assert_eq!(snap.broken_fibres, broken, "case {k}: broken");
+                // And that path reads every connective link: intact ones as fibres, broken ones as
+                // cut or torn.
+                let states: Vec<_> = (0..tissue.body().link_count() as u32)
+                    .map(crate::chainmail::LinkId)
+                    .filter(|&l| tissue.link_kind(l) == Some(crate::tissue::LinkKind::Connective))
+                    .map(|l| tissue.body().link_broken(l))
+                    .collect();
+                let cut = states.iter().filter(|s| **s == Some(crate::chainmail::BreakReason::Cut)).count();
+                assert_eq!(states.iter().filter(|s| s.is_none()).count(), fibres.len(), "case {k}: intact");
+                assert_eq!(states.len() - fibres.len(), broken.len(), "case {k}: broken");
+                assert_eq!(broken.iter().filter(|b| b.cut).count(), cut, "case {k}: cut");
                 if k == 0 && at == steps {
-                    assert!(intact > 0 && broken > 0, "the careful script cuts fibres");
+                    assert!(!fibres.is_empty() && !broken.is_empty(), "the careful script cuts fibres");
                 }
             }
         }

@@ -6,6 +6,20 @@ use crate::simulation::{World, WorldConfig};
 use crate::tissue::{FemSpec, LayeredSpec, Pinning, TissueError, TissueSpec, VolumeSpec};
 
 impl Scene {
+    /// The same scene at another resolution: `nu × nv` elements per layer of layered tissue, `nu`
+    /// along each axis of a volume (`nv` unused). What a trainee meets does not change with it (the
+    /// instruments, limits and goals are in metres), only how smooth the tissue looks. Explicit
+    /// element coordinates (`u_coords`, `v_coords`) are kept, so building a scene that has them then
+    /// reports their count. For benches, examples and tests that play one exercise at several
+    /// resolutions.
+    pub fn with_resolution(mut self, nu: u32, nv: u32) -> Self {
+        match &mut self.tissue {
+            Tissue::Layers(l) => l.resolution = [nu, nv],
+            Tissue::Volume(v) => v.resolution = [nu; 3],
+        }
+        self
+    }
+
     /// What the tissue builder needs.
     pub fn tissue_spec(&self) -> Result<TissueSpec, TissueError> {
         match &self.tissue {
@@ -66,5 +80,31 @@ impl Scene {
             world.set_incision(goals.incision.iter().map(|&(u, v)| [u, v]).collect());
         }
         Ok(world)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scene at another resolution differs from it in that alone, and builds that many elements:
+    /// `nu × nv` per layer, `nu³` in a volume.
+    #[test]
+    fn a_scene_at_another_resolution_differs_in_that_alone() {
+        let layered =
+            Scene::from_str(include_str!("../../scenes/meninges.ron"), "meninges.ron").expect("scene");
+        let volume = Scene::from_str(include_str!("../../scenes/volume.ron"), "volume.ron").expect("scene");
+        for (scene, [nu, nv], want) in [(layered, [24, 18], 2 * 24 * 18), (volume, [7, 99], 7 * 7 * 7)] {
+            let at = scene.clone().with_resolution(nu, nv);
+            let mut back = at.clone();
+            match (&mut back.tissue, &scene.tissue) {
+                (Tissue::Layers(b), Tissue::Layers(s)) => b.resolution = s.resolution,
+                (Tissue::Volume(b), Tissue::Volume(s)) => b.resolution = s.resolution,
+                _ => panic!("the tissue's kind changed"),
+            }
+            assert_eq!(back, scene, "only the resolution changes");
+            let world = at.build_world(false).expect("world");
+            assert_eq!(world.tissue().body().element_count(), want);
+        }
     }
 }

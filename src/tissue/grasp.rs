@@ -264,7 +264,7 @@ impl Tissue {
 #[cfg(test)]
 mod tests {
     use crate::runner::Player;
-    use crate::scene::{Scene, Script, Tissue as SceneTissue};
+    use crate::scene::{Scene, Script};
     use crate::simulation::World;
 
     /// The careful meninges exercise at `res`, its blocked lifts along the normal kept while the
@@ -281,10 +281,7 @@ mod tests {
 
     /// A layered scene at `res` (its text), and a player of a script (its text).
     fn played(scene: &str, script: &str, res: [u32; 2]) -> (World, Player) {
-        let mut scene = Scene::from_str(scene, "scene.ron").expect("scene");
-        if let SceneTissue::Layers(l) = &mut scene.tissue {
-            l.resolution = res;
-        }
+        let scene = Scene::from_str(scene, "scene.ron").expect("scene").with_resolution(res[0], res[1]);
         let script = Script::from_str(script, "script.ron").expect("script");
         (scene.build_world(false).expect("world"), Player::new(script.0))
     }

@@ -254,7 +254,8 @@ impl Tissue {
 
     /// Refills `out` with the intact connective fibres as world-space segments (the lower layer's end
     /// first), `stretch` with each one's world stretch, `sites` with where each stands at rest, and
-    /// `broken` with the fibres cut or torn.
+    /// `broken` with the fibres cut or torn. The direct path, reading the tissue itself: the reference
+    /// that a frame filled raw ([`Tissue::fill_fibres_raw`]) and finished by its reader is compared with.
     pub fn fill_fibres(
         &self,
         out: &mut Vec<[[f32; 3]; 2]>,

@@ -542,12 +542,9 @@ mod tests {
     use crate::tissue::Tissue;
 
     fn meninges(res: [u32; 2]) -> Tissue {
-        let mut scene =
-            crate::scene::Scene::from_str(include_str!("../../scenes/meninges.ron"), "meninges.ron")
-                .expect("scene");
-        if let crate::scene::Tissue::Layers(l) = &mut scene.tissue {
-            l.resolution = res;
-        }
+        let scene = crate::scene::Scene::from_str(include_str!("../../scenes/meninges.ron"), "meninges.ron")
+            .expect("scene")
+            .with_resolution(res[0], res[1]);
         scene.build_world(false).expect("world").tissue().clone()
     }
 

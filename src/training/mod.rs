@@ -804,7 +804,7 @@ mod tests {
     fn the_tally_taken_in_as_links_break_is_what_reading_every_link_finds() {
         use crate::chainmail::BreakReason;
         use crate::runner::{Episode, Player, Source};
-        use crate::scene::{Scene, Script, Tissue as SceneTissue};
+        use crate::scene::{Scene, Script};
         let near = |x: (u32, f64), y: (u32, f64)| x.0 == y.0 && (x.1 - y.1).abs() <= 1e-9 * y.1.abs();
         let same = |kept: &tally::Tally, read: &tally::Tally| {
             kept.target == read.target
@@ -836,10 +836,7 @@ mod tests {
             ("durotomy", "durotomy_careful"),
             ("durotomy", "durotomy_careless"),
         ] {
-            let mut scene = Scene::load(dir.join(format!("{scene}.ron"))).expect("scene");
-            if let SceneTissue::Layers(l) = &mut scene.tissue {
-                l.resolution = [48, 36];
-            }
+            let scene = Scene::load(dir.join(format!("{scene}.ron"))).expect("scene").with_resolution(48, 36);
             let script = Script::load(dir.join(format!("scripts/{script}.ron"))).expect("script");
             let world = scene.build_world(false).expect("world");
             let assessor = scene.goals.clone().map(|g| Assessor::new(g, &world));
