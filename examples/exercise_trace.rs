@@ -13,24 +13,13 @@
 use std::time::Instant;
 
 use dissect::runner::Player;
-use dissect::scene::{Scene, Script};
 
-const MENINGES: &str = include_str!("../scenes/meninges.ron");
-const CAREFUL: &str = include_str!("../scenes/scripts/meninges_careful.ron");
+mod common;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = |i: usize, d: u32| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
     let (nu, nv) = (arg(1, 256), arg(2, 192));
-    let files = (std::env::args().nth(3), std::env::args().nth(4));
-    let (scene_text, scene_name, script_text, script_name) = match files {
-        (Some(a), Some(b)) => (std::fs::read_to_string(&a)?, a, std::fs::read_to_string(&b)?, b),
-        _ => (
-            MENINGES.to_string(),
-            "scenes/meninges.ron".to_string(),
-            CAREFUL.to_string(),
-            "meninges_careful.ron".to_string(),
-        ),
-    };
+    let (scene, script) = common::exercise(nu, nv)?;
     // The steps run as the trainer's simulation thread, `dissect run` and the exercise bench run them:
     // on a worker of a pool of its own (`dissect::chainmail::worker_pool`). `TRACE_POOL=global` steps
     // beside rayon's global pool instead, which the product never does: there a large region's split
@@ -47,8 +36,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(ms) = std::env::var("TRACE_WAIT_MS").ok().and_then(|m| m.parse().ok()) {
         std::thread::sleep(std::time::Duration::from_millis(ms));
     }
-    let scene = Scene::from_str(&scene_text, &scene_name)?.with_resolution(nu, nv);
-    let script = Script::from_str(&script_text, &script_name)?;
     let mut world = scene.build_world(false)?;
     let mut player = Player::new(script.0.clone());
     println!(

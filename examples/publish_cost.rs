@@ -3,7 +3,8 @@
 //! of a second at 1 kHz), times `Published::fill` (on the thread that steps), `Published::finish` (on
 //! the window's thread), and the parts of the fill: the raw snapshot (and within it the fibres and
 //! their tear stretch), the assessment and the coach's advice. Prints mean, p50, p99 and max of each, microseconds:
-//! `target/release/examples/publish_cost 512 384`.
+//! `target/release/examples/publish_cost 512 384`; another layered scene and script after the
+//! resolution, as for `thread_pace`.
 use std::time::Instant;
 
 use dissect::runner::Published;
@@ -14,7 +15,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = |i: usize, d: u32| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
     let (nu, nv) = (arg(1, 256), arg(2, 192));
     let _pool = dissect::chainmail::worker_pool("publish")?;
-    let mut episode = common::careful_episode(nu, nv)?;
+    let mut episode = common::exercise_episode(nu, nv)?;
     let (mut frame, mut scratch) = (Published::default(), Published::default());
     let names =
         ["step", "fill", "finish", "raw snapshot", " of it fibres", " tear stretch", "assessment", "advice"];

@@ -2,7 +2,8 @@
 //! thread (`runner::SimThread`) at 1 kHz, at a resolution, while this thread takes the published frame
 //! sixty times a second and finishes it as the windows do. Prints the lateness of the steps' starts
 //! after their deadlines over the whole session (p99 and worst), what the thread reports, and the
-//! score: `target/release/examples/thread_pace 512 384`. Publishing a frame is the thread's work too,
+//! score: `target/release/examples/thread_pace 512 384`; another layered scene and script after the
+//! resolution: `thread_pace 256 192 scenes/durotomy.ron scenes/scripts/durotomy_careful.ron`. Publishing a frame is the thread's work too,
 //! so this is where its cost shows; the exercise benches and `dissect run` step without publishing.
 use std::time::{Duration, Instant};
 
@@ -13,7 +14,7 @@ mod common;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = |i: usize, d: u32| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
     let (nu, nv) = (arg(1, 256), arg(2, 192));
-    let mut sim = SimThread::spawn(common::careful_episode(nu, nv)?)?;
+    let mut sim = SimThread::spawn(common::exercise_episode(nu, nv)?)?;
     let (t, mut frames) = (Instant::now(), 0u32);
     let trace = std::env::var_os("TRACE").is_some();
     // READ_EVERY=n: the reader looks only at every n-th frame time (1 as the windows do), to see what

@@ -358,12 +358,13 @@ impl Body {
     /// equal counts (with equal revisions) mean that no pinned or held element has moved, and no
     /// free one other than by relaxing within the boxes around its neighbours.
     ///
-    /// What a pull along the normal asks of a fixed element depends on these alone: the bounds on
-    /// the elements' heights are difference constraints (`z[x] - z[y]` within `[lo, hi]`), so a
-    /// source raised to `z` asks each element to reach at least `z` less the shortest chain of upper
-    /// bounds from the source to it (the least heights that meet the bounds the reaction's moves
-    /// disturb, which Gibson's lists and the completion find: `reaction/complete.rs`). The heights of
-    /// the free elements in between add nothing to that while the bounds between them hold, which
+    /// What a pull asks of a fixed element depends on these alone: the bounds on each coordinate of
+    /// the elements' positions are difference constraints (along the normal `z[x] - z[y]` within
+    /// `[lo, hi]`), so a source raised to `z` asks each element to reach at least `z` less the
+    /// shortest chain of upper bounds from the source to it (the least heights that meet the bounds
+    /// the reaction's moves disturb, which Gibson's lists and the completion find:
+    /// `reaction/complete.rs`), and likewise along each axis of the surface. The positions of the
+    /// free elements in between add nothing to that while the bounds between them hold, which
     /// relaxation keeps: a pull blocked by pinned or held elements with no room at all stays blocked
     /// however the region between relaxes (`tissue::grasp::BlockedPull`).
     pub fn shifts(&self) -> u64 {

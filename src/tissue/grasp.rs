@@ -19,8 +19,8 @@ pub(crate) struct Jaws {
     seen: Vec<bool>,
     /// The last blocked pull of each pass (indexed by [`Pass`] order: all, plane, normal).
     pub(crate) blocked: [Option<BlockedPull>; 3],
-    /// A blocked pull along the normal holds only while no element has moved at all, as in the
-    /// other passes (the plain rule, for tests that compare the two).
+    /// A blocked pull covers only the same goal, and only while no element has moved at all (the
+    /// plain rule, for tests that compare the two).
     pub(crate) strict: bool,
     /// How many pulls a blocked pull has spared (for tests).
     pub(crate) spared: u64,
@@ -32,18 +32,26 @@ pub(crate) struct Jaws {
     offs: Vec<f32>,
 }
 
-/// A pull that moved nothing because fixed elements held the tissue: while the body's positions,
-/// pins, holds, cuts and materials stay as they were ([`Body::motion`], [`Body::revision`]), the same
-/// pull, or along the normal any pull further the same way, moves nothing too, and the chain
-/// reactions that would find that out again (several per step, each over the whole tent) are skipped.
-/// A held lift that has reached its limit then costs nothing per step.
+/// A pull that moved nothing because fixed elements held the tissue: while the pins, holds, cuts and
+/// materials stay as they were ([`Body::revision`]) and nothing but relaxation has moved
+/// ([`Body::shifts`]), any pull of the same source from where it was to a goal at least as far the
+/// same way in each coordinate moves nothing too (see [`BlockedPull::covers`]), and the chain
+/// reactions that would find that out again (several per step, each over the whole tent or flap) are
+/// skipped. A held lift that has reached its limit, or a drag across the surface that the fibres and
+/// pins hold, then costs nothing per step.
 ///
-/// Along the normal the pull stays blocked while the region between relaxes, too
-/// ([`Body::shifts`]: what it asks of the fixed elements does not depend on the free elements'
-/// heights while the bounds between them hold). On a fine sheet the region takes several steps to
-/// settle after a lift has reached its limit, and until 2026-11-29 each of them searched again from
-/// the jaws' centre and the rest of the jaws, over the whole taut tent, to find the same: the careful
-/// exercise at 512 x 384 spent 0.5-0.6 ms a step on it for 11 steps.
+/// The bounds on each coordinate are difference constraints (`x[a] - x[b]` within `[lo, hi]`), so a
+/// source moved by `d` asks each element to move at least `d` less the shortest chain of bounds from
+/// the source to it (the least moves that meet the bounds the reaction's moves disturb, which
+/// Gibson's lists and the completion find: `reaction/complete.rs`). The free elements' positions in
+/// between add nothing to that while the bounds between them hold, which relaxation keeps.
+///
+/// Until 2026-11-29 each step of a lift that had reached its limit searched again, over the whole
+/// taut tent, while the region relaxed: the careful exercise at 512 x 384 spent 0.5-0.6 ms a step on
+/// it for 11 steps. Until 2026-12-01 that held along the normal only: a drag across the surface
+/// against the fibres searched again at every step of the hand's move (each search ten chain reactions
+/// over the flap, one after another, rolled back), and the careless durotomy at 256 x 192 ran 90 steps
+/// over 1 ms, the worst at 6.7 ms.
 ///
 /// [`Body::motion`]: crate::chainmail::Body::motion
 /// [`Body::revision`]: crate::chainmail::Body::revision
@@ -88,9 +96,18 @@ impl BlockedPull {
     }
 
     /// Whether pulling `source` from `from` to `goal` in `pass` must end as this pull did: the same
-    /// body, the same source where it was, and the same goal (along the normal: a goal at least as
-    /// far the same way, since a larger move asks at least as much of every fixed element, and a body
-    /// whose free elements may have relaxed since, unless `strict`).
+    /// source where it was, the same pins, holds, cuts and materials, and
+    /// - a goal at least as far the same way in each coordinate the pass moves (those this pull moved
+    ///   along; any move along the others): the bounds on each coordinate are difference constraints
+    ///   of their own (the links' boxes are axis-aligned in the lattice), so a larger move asks at
+    ///   least as much of every fixed element in each of them;
+    /// - a body whose free elements may have relaxed since ([`Body::shifts`]): relaxation keeps the
+    ///   bounds between free elements, which is all a pull's demand on the fixed ones goes through.
+    ///
+    /// With `strict` (the plain rule, for tests that compare the two), the same goal exactly and a
+    /// body where nothing has moved at all.
+    ///
+    /// [`Body::shifts`]: crate::chainmail::Body::shifts
     pub(crate) fn covers(
         &self,
         source: ElementId,
@@ -99,21 +116,20 @@ impl BlockedPull {
         body: &crate::chainmail::Body,
         strict: bool,
     ) -> bool {
-        let same = match pass {
-            Pass::Normal if !strict => self.shifts == body.shifts(),
-            _ => self.motion == body.motion(),
-        };
+        let same = if strict { self.motion == body.motion() } else { self.shifts == body.shifts() };
         if self.source != source || self.from != from || !same || self.revision != body.revision() {
             return false;
         }
         let mask = pass.mask();
-        match pass {
-            Pass::Normal => {
-                let (was, now) = (self.goal[2] - from[2], goal[2] - from[2]);
-                was != 0.0 && was.signum() == now.signum() && now.abs() >= was.abs()
-            }
-            _ => (0..3).all(|k| !mask[k] || self.goal[k] == goal[k]),
+        let exact = (0..3).all(|k| !mask[k] || self.goal[k] == goal[k]);
+        let mut moved = (0..3).filter(|&k| mask[k] && self.goal[k] != from[k]).peekable();
+        if strict || moved.peek().is_none() {
+            return exact;
         }
+        moved.all(|k| {
+            let (was, now) = (self.goal[k] - from[k], goal[k] - from[k]);
+            was.signum() == now.signum() && now.abs() >= was.abs()
+        })
     }
 }
 
@@ -267,16 +283,13 @@ mod tests {
     use crate::scene::{Scene, Script};
     use crate::simulation::World;
 
-    /// The careful meninges exercise at `res`, its blocked lifts along the normal kept while the
-    /// region relaxes (`strict` false) or searched again after every relaxation (`strict` true).
-    fn careful(res: [u32; 2], strict: bool) -> (World, Player) {
-        let (mut world, player) = played(
+    /// The careful meninges exercise at `res`.
+    fn careful(res: [u32; 2]) -> (World, Player) {
+        played(
             include_str!("../../scenes/meninges.ron"),
             include_str!("../../scenes/scripts/meninges_careful.ron"),
             res,
-        );
-        world.tissue_mut().jaws.strict = strict;
-        (world, player)
+        )
     }
 
     /// A layered scene at `res` (its text), and a player of a script (its text).
@@ -286,33 +299,84 @@ mod tests {
         (scene.build_world(false).expect("world"), Player::new(script.0))
     }
 
-    /// The careful exercise's final lift reaches what the pins allow while the tent still relaxes:
-    /// the blocked pull kept through the relaxation spares the searches the plain rule makes again
-    /// after every sweep, and every step's state is the one those searches find, to the bit.
+    /// A blocked pull is kept for goals further the same way while the tissue relaxes, in the plane
+    /// and along the normal: the careful exercise's final lift reaches what the pins allow while its
+    /// tent still relaxes, and the careless ones yank the held flap across the surface against its
+    /// fibres and pins for a hundred steps. Kept, the pulls spare the searches the plain rule makes
+    /// again at every step (each several chain reactions over the flap), and every step's state is
+    /// the one those searches find, to the bit.
     #[test]
-    fn a_blocked_lift_is_kept_while_the_tent_relaxes_and_changes_nothing() {
-        let res = [96, 72];
-        let (mut kept, mut kept_player) = careful(res, false);
-        let (mut plain, mut plain_player) = careful(res, true);
-        loop {
-            kept_player.feed(&mut kept);
-            plain_player.feed(&mut plain);
-            let done = kept_player.finished() && kept.pending().is_empty();
-            assert_eq!(done, plain_player.finished() && plain.pending().is_empty());
-            if done {
-                break;
+    fn a_blocked_pull_is_kept_while_the_tissue_relaxes_and_changes_nothing() {
+        let meninges = include_str!("../../scenes/meninges.ron");
+        let durotomy = include_str!("../../scenes/durotomy.ron");
+        for (name, scene, script) in [
+            ("meninges careful", meninges, include_str!("../../scenes/scripts/meninges_careful.ron")),
+            ("meninges careless", meninges, include_str!("../../scenes/scripts/meninges_careless.ron")),
+            ("durotomy careful", durotomy, include_str!("../../scenes/scripts/durotomy_careful.ron")),
+            ("durotomy careless", durotomy, include_str!("../../scenes/scripts/durotomy_careless.ron")),
+        ] {
+            let res = [96, 72];
+            let (mut kept, mut kept_player) = played(scene, script, res);
+            let (mut plain, mut plain_player) = played(scene, script, res);
+            plain.tissue_mut().jaws.strict = true;
+            loop {
+                kept_player.feed(&mut kept);
+                plain_player.feed(&mut plain);
+                let done = kept_player.finished() && kept.pending().is_empty();
+                assert_eq!(done, plain_player.finished() && plain.pending().is_empty());
+                if done {
+                    break;
+                }
+                kept.step();
+                plain.step();
+                assert_eq!(
+                    kept.tissue().body().positions(),
+                    plain.tissue().body().positions(),
+                    "{name}, step {}: keeping a blocked pull changed the state",
+                    kept.step_count()
+                );
             }
-            kept.step();
-            plain.step();
-            assert_eq!(
-                kept.tissue().body().positions(),
-                plain.tissue().body().positions(),
-                "step {}: keeping a blocked pull through relaxation changed the state",
-                kept.step_count()
-            );
+            let (k, p) = (kept.tissue().jaws.spared, plain.tissue().jaws.spared);
+            assert!(k > p, "{name}: kept {k} pulls spared, searched again: {p}");
         }
-        let (k, p) = (kept.tissue().jaws.spared, plain.tissue().jaws.spared);
-        assert!(k > p, "kept through relaxation: {k} pulls spared, searched again: {p}");
+    }
+
+    /// A blocked pull covers goals further the same way and no others: the jaws dragged across the
+    /// sheet until its pins stop them, then pulled back, move back at the first step (with a rule
+    /// that kept a blocked pull for any goal, they stayed).
+    #[test]
+    fn a_drag_blocked_by_the_pins_moves_back_when_pulled_back() {
+        use crate::simulation::{Command, InstrumentKind};
+        let scene = Scene::from_str(include_str!("../../scenes/meninges.ron"), "meninges.ron")
+            .expect("scene")
+            .with_resolution(48, 36);
+        let mut world = scene.build_world(false).expect("world");
+        let t = world.tissue();
+        let h = t.body().lattice().rest_positions()[t.layers()[0].first as usize][2];
+        let (start, edge) = (t.surface_point(0.5, 0.5, h), t.surface_point(1.0, 0.5, h));
+        world.push(Command::Select(InstrumentKind::Forceps));
+        world.push(Command::MoveTo(start));
+        world.push(Command::Grasp);
+        world.step();
+        let e = world.instrument().grasped.expect("the forceps hold the dura");
+        let at = |w: &World| w.tissue().world_position(e).expect("element");
+        // Out past the pinned edge, a fortieth of the way a step.
+        let towards = |k: f32| [0, 1, 2].map(|c| start[c] + k * (edge[c] - start[c]));
+        let mut stuck = 0;
+        for s in 1..=60 {
+            let before = at(&world);
+            world.push(Command::MoveTo(towards(s as f32 / 40.0)));
+            world.step();
+            stuck = if at(&world) == before { stuck + 1 } else { 0 };
+        }
+        assert!(stuck >= 10, "the pins stop the drag ({stuck} steps without a move)");
+        assert!(world.tissue().jaws.spared > 0, "the blocked drag is kept");
+        let held = at(&world);
+        world.push(Command::MoveTo(start));
+        world.step();
+        let back = at(&world);
+        let along = |p: [f32; 3]| (0..3).map(|c| (p[c] - held[c]) * (edge[c] - start[c])).sum::<f32>();
+        assert!(along(back) < 0.0, "pulled back, the jaws move back: {held:?} -> {back:?}");
     }
 
     /// A lift whose cone is not grown waits for it and then catches up (`chainmail::LIFT_GROWTH`):
@@ -324,8 +388,8 @@ mod tests {
     #[test]
     fn a_lift_that_waits_for_its_cone_catches_up() {
         let res = [96, 72];
-        let (mut whole, mut whole_player) = careful(res, false);
-        let (mut slow, mut slow_player) = careful(res, false);
+        let (mut whole, mut whole_player) = careful(res);
+        let (mut slow, mut slow_player) = careful(res);
         slow.tissue_mut().jaws.cone.growth = 50;
         let (mut waited, mut torn) = (0, [0u32; 2]);
         loop {
@@ -369,7 +433,7 @@ mod tests {
     fn the_cone_s_lift_is_the_chain_reaction_s() {
         use crate::chainmail::Pass;
 
-        let (mut world, mut player) = careful([96, 72], false);
+        let (mut world, mut player) = careful([96, 72]);
         let (mut compared, mut rose) = (0, 0usize);
         let mut last = None;
         loop {
@@ -505,7 +569,7 @@ mod tests {
                 .collect()
         }
 
-        let (mut world, mut player) = careful([96, 72], false);
+        let (mut world, mut player) = careful([96, 72]);
         let (mut seeds, mut d): (Vec<usize>, Vec<f32>) = (Vec::new(), Vec::new());
         let (mut checked, mut rose, mut over, mut worst) = (0, 0usize, 0usize, 0f32);
         let spacing = 0.08 / 96.0;
