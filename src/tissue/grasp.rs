@@ -299,23 +299,40 @@ mod tests {
         (scene.build_world(false).expect("world"), Player::new(script.0))
     }
 
-    /// A blocked pull is kept for goals further the same way while the tissue relaxes, in the plane
-    /// and along the normal: the careful exercise's final lift reaches what the pins allow while its
-    /// tent still relaxes, and the careless ones yank the held flap across the surface against its
-    /// fibres and pins for a hundred steps. Kept, the pulls spare the searches the plain rule makes
-    /// again at every step (each several chain reactions over the flap), and every step's state is
-    /// the one those searches find, to the bit.
+    /// A blocked pull is kept for goals further the same way while the tissue relaxes, in the plane,
+    /// along the normal and in a volume: the careful exercise's final lift reaches what the pins
+    /// allow while its tent still relaxes, the careless ones yank the held flap across the surface
+    /// against its fibres and pins for a hundred steps, and the volume's forceps pull its block up
+    /// against its clamped base. Kept, the pulls spare the searches the plain rule makes again at
+    /// every step (each several chain reactions over the flap), and every step's state is the one
+    /// those searches find, to the bit.
     #[test]
     fn a_blocked_pull_is_kept_while_the_tissue_relaxes_and_changes_nothing() {
         let meninges = include_str!("../../scenes/meninges.ron");
         let durotomy = include_str!("../../scenes/durotomy.ron");
-        for (name, scene, script) in [
-            ("meninges careful", meninges, include_str!("../../scenes/scripts/meninges_careful.ron")),
-            ("meninges careless", meninges, include_str!("../../scenes/scripts/meninges_careless.ron")),
-            ("durotomy careful", durotomy, include_str!("../../scenes/scripts/durotomy_careful.ron")),
-            ("durotomy careless", durotomy, include_str!("../../scenes/scripts/durotomy_careless.ron")),
+        let (sheet, block) = ([96, 72], [12, 12]);
+        for (name, scene, script, res) in [
+            ("meninges careful", meninges, include_str!("../../scenes/scripts/meninges_careful.ron"), sheet),
+            (
+                "meninges careless",
+                meninges,
+                include_str!("../../scenes/scripts/meninges_careless.ron"),
+                sheet,
+            ),
+            ("durotomy careful", durotomy, include_str!("../../scenes/scripts/durotomy_careful.ron"), sheet),
+            (
+                "durotomy careless",
+                durotomy,
+                include_str!("../../scenes/scripts/durotomy_careless.ron"),
+                sheet,
+            ),
+            (
+                "volume",
+                include_str!("../../scenes/volume.ron"),
+                include_str!("../../scenes/scripts/volume.ron"),
+                block,
+            ),
         ] {
-            let res = [96, 72];
             let (mut kept, mut kept_player) = played(scene, script, res);
             let (mut plain, mut plain_player) = played(scene, script, res);
             plain.tissue_mut().jaws.strict = true;
