@@ -1,10 +1,12 @@
-//! The simulation thread's timing while a trainee works: the careful meninges script played on the
-//! thread (`runner::SimThread`) at 1 kHz, at a resolution, while this thread takes the published frame
+//! The simulation thread's timing while a trainee works: an exercise's script played on the thread
+//! (`runner::SimThread`) at 1 kHz, at a resolution, while this thread takes the published frame
 //! sixty times a second and finishes it as the windows do. Prints the lateness of the steps' starts
 //! after their deadlines over the whole session (p99 and worst), what the thread reports, and the
-//! score: `target/release/examples/thread_pace 512 384`; another layered scene and script after the
-//! resolution: `thread_pace 256 192 scenes/durotomy.ron scenes/scripts/durotomy_careful.ron`. Publishing a frame is the thread's work too,
-//! so this is where its cost shows; the exercise benches and `dissect run` step without publishing.
+//! score. The careful meninges script by default: `target/release/examples/thread_pace 512 384`;
+//! another layered scene and script after the resolution:
+//! `thread_pace 256 192 scenes/durotomy.ron scenes/scripts/durotomy_careful.ron`. Publishing a frame
+//! is the thread's work too, so this is where its cost shows; the exercise benches and `dissect run`
+//! step without publishing.
 use std::time::{Duration, Instant};
 
 use dissect::runner::SimThread;

@@ -53,7 +53,6 @@ pub(crate) struct Jaws {
 /// over the flap, one after another, rolled back), and the careless durotomy at 256 x 192 ran 90 steps
 /// over 1 ms, the worst at 6.7 ms.
 ///
-/// [`Body::motion`]: crate::chainmail::Body::motion
 /// [`Body::revision`]: crate::chainmail::Body::revision
 /// [`Body::shifts`]: crate::chainmail::Body::shifts
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -292,6 +291,25 @@ mod tests {
         )
     }
 
+    /// Plays two worlds side by side, each fed by its player, until both scripts are played out (they
+    /// must end together); `step` steps them once each time and checks what it compares.
+    fn lockstep(
+        (a, pa): (&mut World, &mut Player),
+        (b, pb): (&mut World, &mut Player),
+        mut step: impl FnMut(&mut World, &mut World),
+    ) {
+        loop {
+            pa.feed(a);
+            pb.feed(b);
+            let done = pa.finished() && a.pending().is_empty();
+            assert_eq!(done, pb.finished() && b.pending().is_empty());
+            if done {
+                break;
+            }
+            step(a, b);
+        }
+    }
+
     /// A layered scene at `res` (its text), and a player of a script (its text).
     fn played(scene: &str, script: &str, res: [u32; 2]) -> (World, Player) {
         let scene = Scene::from_str(scene, "scene.ron").expect("scene").with_resolution(res[0], res[1]);
@@ -336,14 +354,7 @@ mod tests {
             let (mut kept, mut kept_player) = played(scene, script, res);
             let (mut plain, mut plain_player) = played(scene, script, res);
             plain.tissue_mut().jaws.strict = true;
-            loop {
-                kept_player.feed(&mut kept);
-                plain_player.feed(&mut plain);
-                let done = kept_player.finished() && kept.pending().is_empty();
-                assert_eq!(done, plain_player.finished() && plain.pending().is_empty());
-                if done {
-                    break;
-                }
+            lockstep((&mut kept, &mut kept_player), (&mut plain, &mut plain_player), |kept, plain| {
                 kept.step();
                 plain.step();
                 assert_eq!(
@@ -352,7 +363,7 @@ mod tests {
                     "{name}, step {}: keeping a blocked pull changed the state",
                     kept.step_count()
                 );
-            }
+            });
             let (k, p) = (kept.tissue().jaws.spared, plain.tissue().jaws.spared);
             assert!(k > p, "{name}: kept {k} pulls spared, searched again: {p}");
         }
@@ -409,20 +420,13 @@ mod tests {
         let (mut slow, mut slow_player) = careful(res);
         slow.tissue_mut().jaws.cone.growth = 50;
         let (mut waited, mut torn) = (0, [0u32; 2]);
-        loop {
-            whole_player.feed(&mut whole);
-            slow_player.feed(&mut slow);
-            let done = whole_player.finished() && whole.pending().is_empty();
-            assert_eq!(done, slow_player.finished() && slow.pending().is_empty());
-            if done {
-                break;
-            }
+        lockstep((&mut whole, &mut whole_player), (&mut slow, &mut slow_player), |whole, slow| {
             let before = slow.instrument().grasped.and_then(|e| slow.tissue().world_position(e));
             whole.step();
             slow.step();
             torn[0] += whole.last_step().links_torn;
             torn[1] += slow.last_step().links_torn;
-            let (Some(e), Some(before)) = (slow.instrument().grasped, before) else { continue };
+            let (Some(e), Some(before)) = (slow.instrument().grasped, before) else { return };
             let after = slow.tissue().world_position(e).expect("grasped");
             let asked = slow.instrument().target;
             if slow.instrument().kind == crate::simulation::InstrumentKind::Forceps
@@ -432,7 +436,7 @@ mod tests {
             {
                 waited += 1;
             }
-        }
+        });
         println!("the lift waited {waited} steps for its cone");
         assert!(waited >= 3, "the lift waited {waited} steps for its cone");
         assert_eq!(torn, [0, 0], "links torn");
